@@ -1,0 +1,179 @@
+"""The physics backend interface that engine plugins implement (MuJoCo, PyBullet, ...).
+
+Conventions, for every method:
+
+* SI units, world frame z up; quaternions are ``(w, x, y, z)``; vectors are ``numpy`` float arrays of shape (3,).
+* Entities are the world's robots, objects and humans, by name. Parts are rigid bodies of an entity: a robot's URDF
+  link names; an object or human has the single part ``"main"``. ``part=None`` means the entity's main part (a
+  robot's root link).
+* Joints are a robot's movable (1-DoF) URDF joints, by name.
+* The core validates names and values before calling; a backend may assume names exist and numbers are finite.
+* Nothing here advances time except :meth:`Backend.step`. The core owns the simulation clock.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+import numpy as np
+import numpy.typing as npt
+
+from .world.models import World
+
+Array = npt.NDArray[np.float64]
+
+GROUND = "ground"
+"""Entity name reported in contacts with the ground plane (not an agent: it has no API)."""
+
+MAIN = "main"
+"""Name of the single part of objects and humans; also accepted for a robot's root link."""
+
+
+class Backend(ABC):
+    """A physics engine holding one world."""
+
+    name: ClassVar[str]
+    """Registry name, e.g. ``"mujoco"``."""
+
+    # ------------------------------------------------------------------ life cycle
+    @abstractmethod
+    def build(self, world: World) -> None:
+        """Create the engine's model of ``world`` (paths in it are relative to ``world.base_dir``).
+
+        Raises:
+            BackendError: the world cannot be built (e.g. a URDF the engine rejects); the message names the entity.
+        """
+
+    @abstractmethod
+    def step(self) -> None:
+        """Advance physics by one ``world.timestep``; then clear wrenches and torques applied for this step."""
+
+    @abstractmethod
+    def reset(self) -> None:
+        """Restore every body and joint to its state right after :meth:`build`; release all grasps; restore
+        gravity, dynamics and collision modes and masses. Time is the core's business and is not touched."""
+
+    # ------------------------------------------------------------------ introspection
+    @abstractmethod
+    def parts(self, entity: str) -> list[str]:
+        """Part names of ``entity`` (main part first)."""
+
+    @abstractmethod
+    def joints(self, entity: str) -> list[str]:
+        """Movable joint names of ``entity`` (empty for objects and humans)."""
+
+    # ------------------------------------------------------------------ state
+    @abstractmethod
+    def get_pose(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
+        """World position [m] and orientation (w, x, y, z) of a part's frame (URDF link frame)."""
+
+    @abstractmethod
+    def set_pose(self, entity: str, position: Array | None = None, quaternion: Array | None = None) -> None:
+        """Teleport the entity so that its main part has this pose (``None`` keeps that component)."""
+
+    @abstractmethod
+    def get_velocity(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
+        """Linear [m/s] and angular [rad/s] velocity of a part's frame origin, world frame."""
+
+    @abstractmethod
+    def set_velocity(self, entity: str, linear: Array | None = None, angular: Array | None = None) -> None:
+        """Set the main part's linear [m/s] / angular [rad/s] velocity, world frame (``None`` keeps it)."""
+
+    @abstractmethod
+    def get_com(self, entity: str, part: str | None = None) -> Array:
+        """World position [m] of a part's centre of mass."""
+
+    @abstractmethod
+    def apply_wrench(self, entity: str, part: str | None, force: Array, torque: Array) -> None:
+        """Add a force [N] at the part's centre of mass and a torque [N m], world frame, for the next step only."""
+
+    # ------------------------------------------------------------------ properties and modes
+    @abstractmethod
+    def get_mass(self, entity: str) -> float:
+        """Total mass [kg] of the entity."""
+
+    @abstractmethod
+    def set_mass(self, entity: str, mass: float) -> None:
+        """Set the total mass [kg] (> 0); every part's mass and inertia are scaled by the same factor."""
+
+    @abstractmethod
+    def set_gravity_mode(self, entity: str, enabled: bool) -> None:
+        """Whether gravity acts on the entity."""
+
+    @abstractmethod
+    def set_dynamics_mode(self, entity: str, enabled: bool) -> None:
+        """Dynamics off: the entity is held exactly where it is (kinematic) and moves only through ``set_pose``
+        and ``set_joint_angle``; forces have no effect. Dynamics on: simulated normally."""
+
+    @abstractmethod
+    def set_collision_mode(self, entity: str, enabled: bool) -> None:
+        """Whether the entity collides with anything."""
+
+    # ------------------------------------------------------------------ joints
+    @abstractmethod
+    def get_joint_angle(self, entity: str, joint: str) -> float:
+        """Joint position [rad] or [m]."""
+
+    @abstractmethod
+    def set_joint_angle(self, entity: str, joint: str, angle: float) -> None:
+        """Set a joint position instantly (kinematic); its position servo then holds that angle."""
+
+    @abstractmethod
+    def get_joint_velocity(self, entity: str, joint: str) -> float:
+        """Joint velocity [rad/s] or [m/s]."""
+
+    @abstractmethod
+    def set_joint_target(self, entity: str, joint: str, angle: float) -> None:
+        """Drive the joint's actuator to a position [rad] (position servo with the world's gains)."""
+
+    @abstractmethod
+    def set_joint_velocity(self, entity: str, joint: str, velocity: float, max_torque: float | None = None) -> None:
+        """Drive the joint's actuator at a velocity [rad/s] (velocity servo), optionally limiting its torque [N m].
+        Wheel joints of a differential drive are always in this mode."""
+
+    @abstractmethod
+    def add_joint_torque(self, entity: str, joint: str, torque: float) -> None:
+        """Add a torque [N m] (or force [N]) on a joint for the next step only."""
+
+    @abstractmethod
+    def get_joint_position(self, entity: str, joint: str) -> Array:
+        """World position [m] of the joint's anchor (the child link frame origin)."""
+
+    # ------------------------------------------------------------------ grasping
+    @abstractmethod
+    def attach(self, entity: str, part: str, obj: str) -> None:
+        """Rigidly attach object ``obj`` to ``entity``'s ``part`` in their current relative pose (the core has
+        checked the grasp rules)."""
+
+    @abstractmethod
+    def detach(self, entity: str, part: str, obj: str) -> None:
+        """Remove the attachment made by :meth:`attach`."""
+
+    # ------------------------------------------------------------------ contacts and rays
+    @abstractmethod
+    def contacts(self) -> frozenset[tuple[int, int]]:
+        """Pairs of part ids in contact after the last step, each pair ``(low id, high id)``."""
+
+    @abstractmethod
+    def part_of(self, part_id: int) -> tuple[str, str]:
+        """``(entity, part)`` of a part id from :meth:`contacts` (``(GROUND, MAIN)`` for the ground plane)."""
+
+    @abstractmethod
+    def ray_cast(self, origin: Array, directions: npt.NDArray[np.float64], max_range: float,
+                 exclude: str | None = None) -> Array:
+        """Cast rays from one origin.
+
+        Args:
+            origin: (3,) world point [m].
+            directions: (N, 3) unit vectors, world frame.
+            max_range: ignore hits further than this [m].
+            exclude: an entity whose parts the rays pass through (the sensor's own robot).
+
+        Returns:
+            (N,) distances [m]; ``inf`` where nothing is hit within ``max_range``.
+        """
+
+
+class BackendError(RuntimeError):
+    """The backend could not do what was asked; the message says why and what would be valid."""

@@ -1,0 +1,25 @@
+"""World files: XML -> strict pydantic models with ``file:line:column`` in every error."""
+
+from .exceptions import WorldError, WorldIssue
+from .models import (
+    Arm,
+    BareAgent,
+    Drive,
+    Entity,
+    Gains,
+    Gripper,
+    Human,
+    Lidar,
+    Object,
+    PluginConfig,
+    Pose,
+    Robot,
+    World,
+)
+from .parser import parse_world
+from .urdf import UrdfError, UrdfJoint, UrdfModel, read_urdf
+
+__all__ = [
+    "Arm", "BareAgent", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "Object", "PluginConfig", "Pose",
+    "Robot", "UrdfError", "UrdfJoint", "UrdfModel", "World", "WorldError", "WorldIssue", "parse_world", "read_urdf",
+]

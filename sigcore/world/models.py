@@ -1,0 +1,288 @@
+"""The world, as strict pydantic models. SI units, z up, right-handed (REP-103).
+
+Every model forbids unknown fields and is frozen. XML attributes arrive as strings; the ``Vec*`` types split
+space-separated numbers. The parser (``parser.py``) maps each validation error back to ``file:line:column``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, field_validator, model_validator
+
+NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]*$"
+"""Entity names become ROS 2 topic names (``<agent>_setPosition``): a letter, then letters, digits, ``_``."""
+
+
+def _numbers(count: int | None) -> BeforeValidator:
+    def parse(value: object) -> object:
+        if isinstance(value, str):
+            parts = value.split()
+            try:
+                numbers = tuple(float(p) for p in parts)
+            except ValueError:
+                raise ValueError(f"expected numbers separated by spaces, got {value!r}") from None
+            value = numbers
+        if isinstance(value, tuple | list):
+            if count is not None and len(value) != count:
+                raise ValueError(f"expected {count} numbers, got {len(value)}")
+            for v in value:
+                if isinstance(v, float) and not math.isfinite(v):
+                    raise ValueError(f"numbers must be finite, got {v}")
+        return value
+
+    return BeforeValidator(parse)
+
+
+def _finite(value: float) -> float:
+    if not math.isfinite(value):
+        raise ValueError(f"must be a finite number, got {value}")
+    return value
+
+
+Vec3 = Annotated[tuple[float, float, float], _numbers(3)]
+Vec4 = Annotated[tuple[float, float, float, float], _numbers(4)]
+Vec6 = Annotated[tuple[float, float, float, float, float, float], _numbers(6)]
+Floats = Annotated[tuple[float, ...], _numbers(None)]
+Name = Annotated[str, Field(pattern=NAME_PATTERN, max_length=64)]
+Tags = Annotated[tuple[str, ...], BeforeValidator(lambda v: tuple(v.split()) if isinstance(v, str) else v)]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, str_strip_whitespace=True)
+
+
+class Pose(_Model):
+    """A pose: position [m] and roll/pitch/yaw [rad] (fixed axes x, y, z)."""
+
+    xyz: Vec3 = (0.0, 0.0, 0.0)
+    rpy: Vec3 = (0.0, 0.0, 0.0)
+
+    @classmethod
+    def parse(cls, value: object) -> object:
+        """Accept ``"x y z roll pitch yaw"`` or ``"x y z"``."""
+        if isinstance(value, str):
+            parts = value.split()
+            if len(parts) not in (3, 6):
+                raise ValueError(f"expected 'x y z' or 'x y z roll pitch yaw' (6 numbers), got {value!r}")
+            try:
+                numbers = [float(p) for p in parts]
+            except ValueError:
+                raise ValueError(f"expected numbers separated by spaces, got {value!r}") from None
+            if not all(math.isfinite(n) for n in numbers):
+                raise ValueError(f"numbers must be finite, got {value!r}")
+            return cls(xyz=tuple(numbers[:3]), rpy=tuple(numbers[3:]) if len(numbers) == 6 else (0.0, 0.0, 0.0))
+        return value
+
+
+PoseField = Annotated[Pose, BeforeValidator(Pose.parse)]
+
+
+class PluginConfig(_Model):
+    """``<plugin name="slam" agent="robot_000" .../>``: a feature plugin enabled for this world.
+
+    Every other attribute is passed to the plugin as a string; the plugin validates it.
+    """
+
+    name: Name
+    config: dict[str, str] = Field(default_factory=dict)
+    line: int = 0
+
+
+class Drive(_Model):
+    """``<drive>``: differential drive over two wheel joints of the robot's URDF."""
+
+    type: Literal["differential"] = "differential"
+    left: str = Field(description="left wheel joint name")
+    right: str = Field(description="right wheel joint name")
+    radius: float = Field(gt=0, le=5, description="wheel radius in [m]")
+    separation: float = Field(gt=0, le=20, description="distance between the wheels in [m]")
+    max_wheel_velocity: float = Field(default=20.0, gt=0, description="wheel speed limit in [rad/s]")
+    max_torque: float = Field(default=20.0, gt=0, description="wheel motor torque limit in [N m]")
+
+
+class Lidar(_Model):
+    """``<lidar>``: a planar laser scanner on one link, rays in the link's x-y plane, counter-clockwise."""
+
+    name: Name
+    link: str = Field(description="URDF link the scanner sits on")
+    beams: int = Field(default=360, ge=1, le=10000)
+    fov: float = Field(default=2 * math.pi, gt=0, le=2 * math.pi, description="field of view in [rad]")
+    range: Annotated[tuple[float, float], _numbers(2)] = (0.05, 10.0)
+    rate: float = Field(default=10.0, gt=0, le=1000, description="scans per simulated second in [Hz]")
+    noise: float = Field(default=0.0, ge=0, le=1, description="Gaussian range noise std-dev in [m]")
+
+    @field_validator("range")
+    @classmethod
+    def _range(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if not 0 <= v[0] < v[1]:
+            raise ValueError(f"expected 'min max' with 0 <= min < max, got {v[0]} {v[1]}")
+        return v
+
+
+class Gripper(_Model):
+    """``<gripper>``: a part that can grasp graspable objects within ``grasp_radius``."""
+
+    part: str = Field(description="URDF link that holds grasped objects")
+    grasp_radius: float = Field(default=0.1, gt=0, le=2, description="max distance part origin to object [m]")
+    side: Literal["left", "right"] | None = Field(default=None, description="which arm, for sig_ros 'arm' names")
+
+
+class Arm(_Model):
+    """``<arm>``: a kinematic chain from ``base`` link to ``tip`` link (used by IK)."""
+
+    name: Name
+    base: str
+    tip: str
+
+
+class Gains(_Model):
+    """``<gains>``: servo gains of the joint actuators (all non-wheel joints)."""
+
+    kp: float = Field(default=200.0, gt=0, description="position gain in [N m/rad]")
+    kv: float = Field(default=10.0, ge=0, description="damping in [N m s/rad]")
+    max_torque: float = Field(default=100.0, gt=0, description="actuator torque limit in [N m]")
+
+
+class Robot(_Model):
+    """``<robot>``: an articulated body from a URDF file."""
+
+    kind: Literal["robot"] = "robot"
+    name: Name
+    urdf: Path
+    pose: PoseField = Pose()
+    controller: str | None = None
+    fixed: bool = Field(default=False, description="root link welded to the world")
+    drive: Drive | None = None
+    lidars: tuple[Lidar, ...] = ()
+    grippers: tuple[Gripper, ...] = ()
+    arms: tuple[Arm, ...] = ()
+    gains: Gains = Gains()
+    tags: Tags = ()
+
+
+Shape = Literal["box", "sphere", "cylinder", "capsule"]
+_SIZE_COUNT = {"box": 3, "sphere": 1, "cylinder": 2, "capsule": 2}
+_SIZE_HELP = {
+    "box": "'sx sy sz' (full lengths)",
+    "sphere": "'radius'",
+    "cylinder": "'radius length'",
+    "capsule": "'radius length' (length of the cylindrical part)",
+}
+
+
+class Object(_Model):
+    """``<object>``: a rigid body: a primitive shape, a mesh, or a URDF model."""
+
+    kind: Literal["object"] = "object"
+    name: Name
+    shape: Shape | None = None
+    size: Floats | None = None
+    mesh: Path | None = None
+    urdf: Path | None = None
+    scale: Annotated[float, Field(gt=0)] = 1.0
+    mass: float = Field(default=1.0, gt=0, le=1e5, description="in [kg] (ignored when static)")
+    static: bool = False
+    graspable: bool = False
+    tags: Tags = ()
+    pose: PoseField = Pose()
+    color: Vec4 = (0.7, 0.7, 0.7, 1.0)
+    friction: float = Field(default=1.0, ge=0, le=10, description="sliding friction coefficient")
+    controller: str | None = None
+
+    @model_validator(mode="after")
+    def _geometry(self) -> Object:
+        given = [k for k in ("shape", "mesh", "urdf") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "exactly one of 'shape', 'mesh' or 'urdf' is required"
+                + (f", got {', '.join(given)}" if given else "")
+            )
+        if self.shape is not None:
+            if self.size is None:
+                raise ValueError(f"shape '{self.shape}' needs size={_SIZE_HELP[self.shape]}")
+            if len(self.size) != _SIZE_COUNT[self.shape]:
+                raise ValueError(
+                    f"size of a {self.shape} is {_SIZE_HELP[self.shape]}: "
+                    f"{_SIZE_COUNT[self.shape]} numbers, got {len(self.size)}"
+                )
+            if any(s <= 0 for s in self.size):
+                raise ValueError(f"sizes must be > 0 [m], got {' '.join(str(s) for s in self.size)}")
+        elif self.size is not None:
+            raise ValueError("'size' is only for primitive shapes; meshes use 'scale'")
+        return self
+
+
+class Human(_Model):
+    """``<human>``: a person, modelled as a standing capsule with a head (kinematic unless told otherwise)."""
+
+    kind: Literal["human"] = "human"
+    name: Name
+    pose: PoseField = Pose()
+    height: float = Field(default=1.7, gt=0.3, le=2.5, description="in [m]")
+    mass: float = Field(default=70.0, gt=0, le=500, description="in [kg]")
+    static: bool = Field(default=True, description="held in place (moved only through the API)")
+    controller: str | None = None
+    tags: Tags = ()
+
+
+class BareAgent(_Model):
+    """``<agent>``: an agent with no body, e.g. a moderator."""
+
+    kind: Literal["agent"] = "agent"
+    name: Name
+    controller: str | None = None
+
+
+Entity = Robot | Object | Human
+AgentModel = Robot | Object | Human | BareAgent
+
+
+class World(_Model):
+    """``<world>``: the root element."""
+
+    name: Name = "world"
+    timestep: float = Field(default=0.002, gt=0, le=0.1, description="physics step in [s]")
+    gravity: Vec3 = (0.0, 0.0, -9.81)
+    seed: int = Field(default=0, ge=0, description="seed of sensor noise")
+    plugins: tuple[PluginConfig, ...] = ()
+    agents: tuple[AgentModel, ...] = ()
+    source: Path = Path("<memory>")
+    _locations: dict[tuple[str, str | None], tuple[int, int]] = PrivateAttr(default_factory=dict)
+
+    def location(self, agent: str, attribute: str | None = None) -> tuple[int, int]:
+        """``(line, column)`` of an agent's element (or one of its attributes) in the world file; (0, 0) if unknown."""
+        return self._locations.get((agent, attribute), self._locations.get((agent, None), (0, 0)))
+
+    @property
+    def base_dir(self) -> Path:
+        """Directory that relative model paths are resolved against."""
+        return self.source.parent
+
+    def resolve(self, path: Path) -> Path:
+        """``path`` relative to the world file's directory."""
+        return path if path.is_absolute() else (self.base_dir / path)
+
+    def agent(self, name: str) -> AgentModel:
+        """The agent called ``name``; ``KeyError`` listing valid names otherwise."""
+        for a in self.agents:
+            if a.name == name:
+                return a
+        raise KeyError(f"no agent '{name}'; agents: {', '.join(a.name for a in self.agents)}")
+
+    @property
+    def entities(self) -> tuple[Entity, ...]:
+        """Agents with a body (robots, objects, humans)."""
+        return tuple(a for a in self.agents if not isinstance(a, BareAgent))
+
+    def plugin(self, name: str) -> PluginConfig | None:
+        """The ``<plugin name=...>`` entry, if enabled."""
+        return next((p for p in self.plugins if p.name == name), None)
+
+
+def valid_name(name: str) -> bool:
+    """Whether ``name`` is a valid entity name."""
+    return re.fullmatch(NAME_PATTERN, name) is not None

@@ -1,0 +1,102 @@
+"""A small URDF reader: the link and joint names and the kinematic tree, for validation and the agent API.
+
+Physics engines load the URDF themselves; this only gives the core the names it must check requests against.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+
+
+@dataclass(frozen=True)
+class UrdfJoint:
+    """One ``<joint>`` of a URDF."""
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    lower: float | None = None
+    upper: float | None = None
+
+    @property
+    def movable(self) -> bool:
+        """Revolute, continuous or prismatic (one degree of freedom)."""
+        return self.type in ("revolute", "continuous", "prismatic")
+
+
+@dataclass(frozen=True)
+class UrdfModel:
+    """Names and tree of a URDF robot."""
+
+    name: str
+    links: tuple[str, ...]
+    joints: tuple[UrdfJoint, ...]
+    root: str
+    meshes: tuple[str, ...] = field(default=())
+
+    @property
+    def movable_joints(self) -> tuple[UrdfJoint, ...]:
+        """Joints with one degree of freedom, in file order."""
+        return tuple(j for j in self.joints if j.movable)
+
+    def joint(self, name: str) -> UrdfJoint:
+        """The joint called ``name``; ``KeyError`` listing the valid names otherwise."""
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(f"no joint '{name}'; joints: {', '.join(j.name for j in self.movable_joints)}")
+
+
+class UrdfError(ValueError):
+    """A URDF file could not be read; ``line`` is its line (0 when unknown)."""
+
+    def __init__(self, path: Path, line: int, message: str) -> None:
+        self.path, self.line = path, line
+        super().__init__(f"{path}:{line}: {message}")
+
+
+def read_urdf(path: Path) -> UrdfModel:
+    """Read link and joint names from the URDF file at ``path``.
+
+    Raises:
+        UrdfError: the file is missing, not XML, or not a consistent tree.
+    """
+    try:
+        root = etree.parse(str(path)).getroot()
+    except OSError as e:
+        raise UrdfError(path, 0, f"cannot read: {e}") from None
+    except etree.XMLSyntaxError as e:
+        raise UrdfError(path, e.lineno or 0, f"not valid XML: {e.msg}") from None
+    if root.tag != "robot":
+        raise UrdfError(path, root.sourceline or 0, f"root element is <{root.tag}>, expected <robot>")
+    links = tuple(str(e.get("name")) for e in root.findall("link"))
+    if not links:
+        raise UrdfError(path, root.sourceline or 0, "no <link> in the robot")
+    joints: list[UrdfJoint] = []
+    for e in root.findall("joint"):
+        parent, child = e.find("parent"), e.find("child")
+        jtype = e.get("type", "")
+        if jtype not in JOINT_TYPES or parent is None or child is None:
+            raise UrdfError(path, e.sourceline or 0,
+                            f"joint '{e.get('name')}' needs type in {JOINT_TYPES}, <parent> and <child>")
+        limit = e.find("limit")
+        lower = upper = None
+        if limit is not None and jtype in ("revolute", "prismatic"):
+            lower, upper = float(limit.get("lower", "0")), float(limit.get("upper", "0"))
+        joint = UrdfJoint(str(e.get("name")), jtype, str(parent.get("link")), str(child.get("link")), lower, upper)
+        for link in (joint.parent, joint.child):
+            if link not in links:
+                raise UrdfError(path, e.sourceline or 0, f"joint '{joint.name}' names unknown link '{link}'")
+        joints.append(joint)
+    children = {j.child for j in joints}
+    roots = [link for link in links if link not in children]
+    if len(roots) != 1:
+        raise UrdfError(path, root.sourceline or 0, f"expected one root link, found {roots}")
+    meshes = tuple(str(m.get("filename")) for m in root.iter("mesh"))
+    return UrdfModel(str(root.get("name", path.stem)), links, tuple(joints), roots[0], meshes)
