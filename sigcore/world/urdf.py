@@ -23,6 +23,7 @@ class UrdfJoint:
     child: str
     lower: float | None = None
     upper: float | None = None
+    axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
 
     @property
     def movable(self) -> bool:
@@ -89,7 +90,15 @@ def read_urdf(path: Path) -> UrdfModel:
         lower = upper = None
         if limit is not None and jtype in ("revolute", "prismatic"):
             lower, upper = float(limit.get("lower", "0")), float(limit.get("upper", "0"))
-        joint = UrdfJoint(str(e.get("name")), jtype, str(parent.get("link")), str(child.get("link")), lower, upper)
+        axis_el = e.find("axis")
+        try:
+            axis = tuple(float(v) for v in (axis_el.get("xyz", "1 0 0") if axis_el is not None else "1 0 0").split())
+        except ValueError:
+            axis = ()
+        if len(axis) != 3:
+            raise UrdfError(path, e.sourceline or 0, f"joint '{e.get('name')}': <axis xyz> needs 3 numbers")
+        joint = UrdfJoint(str(e.get("name")), jtype, str(parent.get("link")), str(child.get("link")), lower, upper,
+                          (axis[0], axis[1], axis[2]))
         for link in (joint.parent, joint.child):
             if link not in links:
                 raise UrdfError(path, e.sourceline or 0, f"joint '{joint.name}' names unknown link '{link}'")

@@ -1,0 +1,36 @@
+"""Errors of the agent API. Each carries a message that says what was wrong and what would be valid."""
+
+from __future__ import annotations
+
+from enum import Enum
+
+
+class ApiError(ValueError):
+    """A request to the agent API was refused (unknown name, NaN, out of range, wrong mode...).
+
+    The simulation is unaffected; transports turn this into an error response.
+    """
+
+
+class GraspRefusal(str, Enum):
+    """Why SIGVerse (and sigcore) refuse a grasp."""
+
+    UNKNOWN_PART = "unknown_part"
+    NOT_A_GRIPPER = "not_a_gripper"
+    UNKNOWN_OBJECT = "unknown_object"
+    ALREADY_GRASPING = "already_grasping"
+    HELD_BY_ANOTHER = "held_by_another"
+    NOT_GRASPABLE = "not_graspable"
+    TOO_FAR = "too_far"
+
+
+class GraspError(ApiError):
+    """A grasp was refused; ``reason`` is one of :class:`GraspRefusal`."""
+
+    def __init__(self, reason: GraspRefusal, message: str) -> None:
+        self.reason = reason
+        super().__init__(f"grasp refused ({reason.value}): {message}")
+
+
+class ControllerError(RuntimeError):
+    """A user controller could not be found or created; the message names the agent and what is valid."""

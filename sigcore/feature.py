@@ -1,0 +1,24 @@
+"""The feature interface: world-level add-ons enabled with ``<plugin name=...>`` (SLAM, IK, referee...)."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING, ClassVar
+
+if TYPE_CHECKING:
+    from .sim.simulation import Simulation
+
+
+class Feature(ABC):
+    """A feature of one simulation, configured by the attributes of its ``<plugin>`` element."""
+
+    name: ClassVar[str]
+
+    @abstractmethod
+    def __init__(self, sim: Simulation, config: dict[str, str]) -> None:
+        """Validate ``config`` (raise ``ValueError`` naming the attribute and what is valid) and attach to ``sim``
+        (e.g. with ``sim.add_step_observer``)."""
+
+    def summary(self) -> dict[str, object]:
+        """Figures to print at the end of a run (e.g. a score)."""
+        return {}

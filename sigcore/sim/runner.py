@@ -1,0 +1,110 @@
+"""Run modes: as fast as possible, real time (or a factor of it), paused, lockstep."""
+
+from __future__ import annotations
+
+import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from .. import plugins
+from ..transport import Transport
+from .dispatch import ControllerFailure
+from .simulation import Simulation
+
+
+@dataclass
+class RunControl:
+    """Requests from outside the loop (a transport, a signal handler): pause, resume, step N, stop, reset."""
+
+    paused: bool = False
+    lockstep: bool = False
+    pending_steps: int = 0
+    stop: bool = False
+    reset: bool = False
+
+
+@dataclass(frozen=True)
+class RunReport:
+    """What a run did.
+
+    Attributes:
+        agents: Agent names by kind.
+        steps: Steps taken in this run.
+        sim_time: Simulated time at the end [s].
+        wall_time: Wall-clock duration of the run [s].
+        failures: Controllers disabled during the run.
+        summary: What each feature reported.
+        sim_time_run: Simulated time covered by this run [s].
+    """
+
+    agents: dict[str, list[str]]
+    steps: int
+    sim_time: float
+    wall_time: float
+    failures: list[ControllerFailure] = field(default_factory=list)
+    summary: dict[str, object] = field(default_factory=dict)
+    sim_time_run: float = 0.0
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second in this run."""
+        return self.sim_time_run / self.wall_time if self.wall_time > 0 else float("inf")
+
+
+def run(sim: Simulation, *, duration: float | None = None, steps: int | None = None,
+        realtime_factor: float | None = None, control: RunControl | None = None,
+        transport: Transport | None = None, progress: Callable[[Simulation], None] | None = None,
+        progress_every: float = 0.5) -> RunReport:
+    """Run ``sim`` until ``duration`` simulated seconds or ``steps`` steps have passed (or ``control.stop``).
+
+    Args:
+        sim: The simulation.
+        duration: Simulated seconds to run [s]; None with ``steps`` None runs until stopped.
+        steps: Number of steps to run (wins over ``duration``).
+        realtime_factor: None for as fast as possible; 1.0 for real time; 2.0 for twice real time.
+        control: Pause / lockstep / step-N / stop requests, changed by a transport or a signal handler.
+        transport: Serviced between steps (never during one).
+        progress: Called about every ``progress_every`` wall seconds.
+        progress_every: Wall seconds between progress calls [s].
+    """
+    control = control or RunControl()
+    target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
+    start_step, start_time = sim.step_count, sim.time
+    wall0 = _time.perf_counter()
+    next_progress = wall0 + progress_every
+    sim.start()
+    if transport is not None:
+        transport.start(sim)
+    try:
+        while not control.stop and (target is None or sim.step_count - start_step < target):
+            if transport is not None:
+                idle = control.paused or (control.lockstep and control.pending_steps == 0)
+                transport.service(0.01 if idle else 0.0)
+            if control.reset:
+                control.reset = False
+                sim.reset()
+            if control.paused or control.lockstep:
+                if control.pending_steps <= 0:
+                    if transport is None:
+                        break  # nothing can ever resume us
+                    continue
+                control.pending_steps -= 1
+            sim.step()
+            now = _time.perf_counter()
+            if realtime_factor is not None:
+                ahead = (sim.time - start_time) / realtime_factor - (now - wall0)
+                if ahead > 0.001:
+                    _time.sleep(ahead)
+            if progress is not None and now >= next_progress:
+                next_progress = now + progress_every
+                progress(sim)
+    finally:
+        if transport is not None:
+            transport.stop()
+        plugins.pm.hook.sigcore_simulation_stopped(simulation=sim)
+    wall = _time.perf_counter() - wall0
+    kinds: dict[str, list[str]] = {}
+    for name, handle in sim.agents.items():
+        kinds.setdefault(handle.kind, []).append(name)
+    return RunReport(kinds, sim.step_count - start_step, sim.time, wall, list(sim.dispatch.failures),
+                     sim.summary(), sim.time - start_time)
