@@ -21,12 +21,23 @@ if TYPE_CHECKING:
     from ..sim.simulation import Simulation
 
 
+LIMITS = {"position": 1e4, "velocity": 1e3, "angular velocity": 1e3, "force": 1e6, "torque": 1e6,
+          "acceleration": 1e4}
+"""Largest magnitude accepted per component, by quantity (a guard against values that would blow the solver up)."""
+
+
 def _vec(values: Iterable[float], what: str, n: int = 3) -> Array:
-    arr = np.asarray(list(values), dtype=float)
+    try:
+        arr = np.asarray(list(values), dtype=float)
+    except (TypeError, ValueError):
+        raise ApiError(f"{what} must be {n} numbers, got {values!r}") from None
     if arr.shape != (n,):
         raise ApiError(f"{what} must have {n} numbers, got {arr.size}")
     if not np.all(np.isfinite(arr)):
         raise ApiError(f"{what} must be finite numbers, got {arr.tolist()}")
+    limit = LIMITS.get(what.split(" [")[0], 1e6)
+    if np.any(np.abs(arr) > limit):
+        raise ApiError(f"{what} components must be within ±{limit:g}, got {arr.tolist()}")
     return arr
 
 

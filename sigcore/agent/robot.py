@@ -41,14 +41,14 @@ class RobotObj(SimObj):
         SIGVerse allowed this only with dynamics off; sigcore allows it in both modes.
         """
         j = self._joint(joint)
-        a = _num(angle, "angle [rad]")
+        a = _num(angle, "angle [rad]", low=-1e3, high=1e3)
         self._check_limits(j, a)
         self.sim.backend.set_joint_angle(self.name, j, a)
 
     def set_joint_target(self, joint: str, angle: float) -> None:
         """Move a joint to ``angle`` [rad] through its position servo (over time, with the world's gains)."""
         j = self._joint(joint)
-        a = _num(angle, "angle [rad]")
+        a = _num(angle, "angle [rad]", low=-1e3, high=1e3)
         self._check_limits(j, a)
         self.sim.backend.set_joint_target(self.name, j, a)
 

@@ -1,0 +1,25 @@
+"""Shared fixtures: the core test world on the MuJoCo backend."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from sigcore.sim import Simulation
+from sigcore.world import World, parse_world
+
+DATA = Path(__file__).parent / "data"
+ROOT = Path(__file__).parent.parent
+
+
+@pytest.fixture(scope="session")
+def core_world() -> World:
+    """The core tests' world (a small robot, objects, a human, a bare agent)."""
+    return parse_world(DATA / "sim" / "world.xml")
+
+
+@pytest.fixture
+def sim(core_world: World) -> Simulation:
+    """A fresh simulation of the core world on MuJoCo."""
+    return Simulation(core_world, "mujoco")
