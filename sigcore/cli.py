@@ -45,7 +45,7 @@ def _load(world_file: Path, backend: str) -> object:
 
     try:
         world = parse_world(world_file)
-        plugins.pm.hook.sigcore_world_loaded(world=world)
+        plugins.notify("sigcore_world_loaded", world=world)
         return Simulation(world, backend)
     except WorldError as e:
         raise _fail([str(i) for i in e.issues]) from None
@@ -143,10 +143,20 @@ def check(
 
 
 @app.command()
-def api(world_file: WorldPath) -> None:
+def api(
+    world_file: Annotated[Path | None, typer.Argument(exists=True, dir_okay=False, help="world XML file")] = None,
+    markdown: Annotated[bool, typer.Option("--markdown", help="print the reference as Markdown")] = False,
+) -> None:
     """Print the API table: every topic and service of every agent of a world."""
     from .api import api_table, entries_for
 
+    if markdown:
+        from .api.docs import api_markdown
+
+        print(api_markdown())
+        return
+    if world_file is None:
+        raise _fail(["give a world file (or --markdown for the reference)"])
     try:
         world = parse_world(world_file)
     except WorldError as e:
@@ -168,6 +178,18 @@ def api(world_file: WorldPath) -> None:
     out.print(f"{len(world.agents)} agents, {total} endpoints")
 
 
+@app.command()
+def interfaces(
+    out_dir: Annotated[Path, typer.Option("--out", help="interface package directory")] = Path(
+        "interfaces/sigcore_msgs"),
+) -> None:
+    """Write the sigcore_msgs ROS 2 interface files (msg/, srv/) generated from the API table."""
+    from .api.interfaces import write_interfaces
+
+    files = write_interfaces(out_dir)
+    out.print(f"{len(files)} interface files in {out_dir}")
+
+
 @app.command(name="plugins")
 def plugins_cmd() -> None:
     """List installed plugins, their distributions and versions, and what each provides."""
@@ -175,29 +197,17 @@ def plugins_cmd() -> None:
     table = Table(title="sigcore plugins (entry-point group 'sigcore')")
     for col in ("plugin", "distribution", "version", "provides"):
         table.add_column(col)
-    provided: dict[str, list[str]] = {}
-    for kind, found in (("backend", plugins.backends()), ("transport", plugins.transports()),
-                        ("feature", plugins.features()), ("controller", plugins.controllers())):
-        for name, obj in found.items():
-            module = getattr(obj, "__module__", "")
-            owner = next((i.name for i in infos if module.split(".")[0] == _module_of(i.name)), None)
-            provided.setdefault(owner or "?", []).append(f"{kind} {name}")
     for info in infos:
-        status = ", ".join(provided.get(info.name, [])) if info.error is None else f"FAILED: {info.error}"
+        status = ", ".join(info.provided()) or "-" if info.loaded else f"FAILED: {info.error}"
         table.add_row(info.name, info.distribution, info.version, status)
     out.print(table)
     if not infos:
         out.print("no plugins installed (pip install sigcore-backend-mujoco)")
 
 
-def _module_of(plugin_name: str) -> str:
-    plugin = plugins.pm.get_plugin(plugin_name)
-    return getattr(plugin, "__name__", "").split(".")[0]
-
-
 def main() -> None:
     """Console-script entry point."""
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     plugins.load_plugins()
-    plugins.pm.hook.sigcore_register_commands(cli=app)
+    plugins.add_commands(app)
     app()

@@ -1,9 +1,18 @@
 """Every extension point of sigcore, in one module.
 
-Plugins implement these with ``@sigcore.hookimpl`` and are found through entry points of group ``sigcore``.
-Registration hooks receive a ``register`` callback, so one plugin may add several things and the host keeps the
-registry. World-level event hooks are coarse; per-agent, per-step work is never a hook (a pluggy call costs about
-2 µs, a physics step about 60 µs): a feature that needs every step registers a step observer on the simulation.
+Plugins implement these with ``@sigcore.hookimpl`` (a function of the same name taking a subset of the
+arguments) and are found through entry points of group ``sigcore`` (see :mod:`sigcore.plugins` and
+``docs/plugins.md``).
+
+Registration hooks receive a ``register`` callback, so one plugin may add several things and the host keeps
+the registry. They are called once per plugin, on their own, when it is loaded (the first time anything
+looks a name up), never per simulation. A registration hook that raises, or hands ``register`` something
+invalid, disables its whole plugin, which ``sigcore plugins`` then shows with the error; the others still
+load.
+
+World-level event hooks are coarse; per-agent, per-step work is never a hook (a pluggy call costs about 2 µs,
+a physics step about 60 µs): a feature that needs every step calls ``sim.add_step_observer`` in its
+constructor.
 """
 
 from __future__ import annotations
@@ -14,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import pluggy
 
 if TYPE_CHECKING:
+    from .agent.controller import Controller
     from .backend import Backend
     from .feature import Feature
     from .sim.simulation import Simulation
@@ -22,52 +32,69 @@ if TYPE_CHECKING:
 
 hookspec = pluggy.HookspecMarker("sigcore")
 
-# -------------------------------------------------------------------------------------------------------------------
-# Registration hooks
-# -------------------------------------------------------------------------------------------------------------------
+# ------------------------------------------------------------------------------------------------------------
+# Registration hooks (called once per plugin when it is loaded)
+# ------------------------------------------------------------------------------------------------------------
 
 
 @hookspec
 def sigcore_register_backends(register: Callable[[type[Backend]], None]) -> None:
-    """Register physics backends: call ``register(BackendClass)`` for each; the class's ``name`` is its key."""
+    """Register physics backends: call ``register(BackendClass)`` for each.
+
+    The class must subclass :class:`sigcore.backend.Backend`, implement every abstract method, and set the
+    class attribute ``name`` (its key, e.g. ``"mujoco"``, as in ``Simulation(world, "mujoco")`` and
+    ``sigcore run --backend mujoco``).
+    """
 
 
 @hookspec
 def sigcore_register_transports(register: Callable[[type[Transport]], None]) -> None:
-    """Register transports (e.g. ROS 2): ``register(TransportClass)``; the class's ``name`` is its key."""
+    """Register transports: call ``register(TransportClass)`` for each.
+
+    The class must subclass :class:`sigcore.transport.Transport` and set ``name`` (e.g. ``"ros2"``, used by
+    ``sigcore run --transport ros2``).
+    """
 
 
 @hookspec
 def sigcore_register_features(register: Callable[[type[Feature]], None]) -> None:
-    """Register world features enabled with ``<plugin name=...>``: ``register(FeatureClass)``, keyed by ``name``."""
+    """Register world features: call ``register(FeatureClass)`` for each.
+
+    The class must subclass :class:`sigcore.feature.Feature` and set ``name``; a world enables it with
+    ``<plugin name="NAME" attr="value" .../>`` and the simulation constructs it with those attributes.
+    """
 
 
 @hookspec
-def sigcore_register_controllers(register: Callable[[str, type[Any]], None]) -> None:
+def sigcore_register_controllers(register: Callable[[str, type[Controller]], None]) -> None:
     """Register controller classes under short names: ``register("cleanup.moderator", ModeratorController)``.
 
-    A world then attaches one with ``controller="cleanup.moderator"``.
+    The class must subclass :class:`sigcore.agent.Controller`. A world attaches one with
+    ``controller="cleanup.moderator"``; prefix names with the plugin's name to avoid clashes.
     """
 
 
 @hookspec
 def sigcore_register_commands(cli: Any) -> None:
-    """Add sub-commands to the ``sigcore`` typer app ``cli``."""
+    """Add sub-commands to the ``sigcore`` typer app ``cli`` (a ``typer.Typer``): ``@cli.command()``.
+
+    Called by the ``sigcore`` command line at start-up, after the plugins are loaded.
+    """
 
 
-# -------------------------------------------------------------------------------------------------------------------
-# World-level events
-# -------------------------------------------------------------------------------------------------------------------
+# ------------------------------------------------------------------------------------------------------------
+# World-level events (called in every loaded plugin that implements them)
+# ------------------------------------------------------------------------------------------------------------
 
 
 @hookspec
 def sigcore_world_loaded(world: World) -> None:
-    """A world file was parsed and validated (before the backend builds it)."""
+    """A world file was parsed and validated, before the backend builds it (called by the command line)."""
 
 
 @hookspec
 def sigcore_simulation_started(simulation: Simulation) -> None:
-    """The simulation is built and its controllers initialised; steps are about to run."""
+    """The simulation is built, its features created and every ``on_init`` called; steps follow."""
 
 
 @hookspec

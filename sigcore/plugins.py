@@ -1,10 +1,22 @@
-"""Plugin discovery and the registries of backends, transports, features and controllers."""
+"""Plugin discovery and the registries of backends, transports, features and controllers.
+
+A plugin is a module (or any object) with ``@sigcore.hookimpl`` functions named after
+:mod:`sigcore.hookspecs`. Installed plugins are found through entry points of group ``sigcore`` by
+:func:`load_plugins`; nothing loads at import time, and every lookup (:func:`backends`, :func:`get_backend`,
+...) loads first. Each plugin's registration hooks are called once, on their own, when the plugin is added: so
+a plugin that fails to import or whose hook raises is disabled and reported by name (:func:`plugin_infos`)
+while the others load, and what each plugin provides is known. When two plugins register the same name, the
+first one loaded keeps it and a warning names both.
+"""
 
 from __future__ import annotations
 
+import difflib
 import importlib.metadata
+import inspect
+import logging
 import os
-import sys
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -18,8 +30,15 @@ if TYPE_CHECKING:
     from .transport import Transport
 
 GROUP = "sigcore"
+"""Entry-point group that plugin distributions declare."""
 DISABLE_ENV = "SIGCORE_DISABLE_PLUGIN_AUTOLOAD"
+"""If set (non-empty), entry points are not loaded; plugins can still be added by :func:`register_plugin`."""
+KINDS = ("backend", "transport", "feature", "controller")
+"""What a plugin can register, in the order :attr:`PluginInfo.provides` lists them."""
+_HOOKS = {kind: f"sigcore_register_{kind}s" for kind in KINDS}
+_SPECS = sorted(name for name in vars(hookspecs) if name.startswith("sigcore_"))
 
+log = logging.getLogger("sigcore.plugins")
 hookimpl = pluggy.HookimplMarker("sigcore")
 pm = pluggy.PluginManager("sigcore")
 pm.add_hookspecs(hookspecs)
@@ -27,134 +46,381 @@ pm.add_hookspecs(hookspecs)
 
 @dataclass(frozen=True)
 class PluginInfo:
-    """An installed plugin: entry-point name, distribution and version, and whether it loaded."""
+    """One plugin: where it comes from, whether it loaded, and what it provides.
+
+    Attributes:
+        name: Entry-point name (or the name given to :func:`register_plugin`).
+        distribution: Distribution declaring the entry point (``sigcore-backend-mujoco``); ``""`` in-process.
+        version: That distribution's version; ``""`` in-process.
+        error: Why the plugin is disabled (where it failed, ``Type: message``), or ``None`` if it loaded.
+        module: The entry point's target (``package`` or ``package.module:attr``) or the object's module.
+        provides: Names in effect by kind (``backend``, ``transport``, ``feature``, ``controller``); a name
+            that another plugin registered first is left out (a warning names both).
+    """
 
     name: str
     distribution: str
     version: str
     error: str | None = None
+    module: str = ""
+    provides: Mapping[str, tuple[str, ...]] = field(default_factory=dict, hash=False)
+
+    @property
+    def loaded(self) -> bool:
+        """Whether the plugin loaded (``error`` is ``None``)."""
+        return self.error is None
+
+    def provided(self) -> list[str]:
+        """What it provides as ``"kind name"`` strings, e.g. ``["backend mujoco"]``."""
+        return [f"{kind} {name}" for kind in KINDS for name in self.provides.get(kind, ())]
+
+    def describe(self) -> str:
+        """``'mujoco' (sigcore-backend-mujoco 0.1.0)``, or ``'name' (in-process)``."""
+        origin = f"{self.distribution} {self.version}".strip() or "in-process"
+        return f"'{self.name}' ({origin})"
+
+
+class PluginError(LookupError):
+    """A name that no plugin registered; the message lists the registered names and the failed plugins.
+
+    Attributes:
+        kind: ``backend``, ``transport``, ``feature`` or ``controller``.
+        name: The name asked for.
+        available: The registered names of that kind, sorted.
+        failed: Plugins that failed to load (one of them may have provided ``name``).
+    """
+
+    def __init__(self, kind: str, name: str, available: Sequence[str],
+                 failed: Sequence[PluginInfo] = ()) -> None:
+        self.kind, self.name, self.available, self.failed = kind, name, list(available), list(failed)
+        message = f"{kind} '{name}' is not registered; available: {', '.join(self.available) or 'none'}"
+        close = difflib.get_close_matches(name, self.available, n=1)
+        if close:
+            message += f" (did you mean '{close[0]}'?)"
+        elif not self.available:
+            message += f" (install a sigcore plugin that provides a {kind}; `sigcore plugins` lists them)"
+        if self.failed:
+            failures = "; ".join(f"{i.describe()}: {i.error}" for i in self.failed)
+            message += f"; plugins that failed to load: {failures}"
+        super().__init__(message)
+
+
+class PluginLoadError(RuntimeError):
+    """:func:`register_plugin` refused a plugin; ``info`` says which and why."""
+
+    def __init__(self, info: PluginInfo) -> None:
+        self.info = info
+        super().__init__(f"plugin {info.describe()} failed to load: {info.error}")
+
+
+@dataclass
+class _Record:
+    name: str
+    distribution: str
+    version: str
+    module: str
+    plugin: object | None = None
+    error: str | None = None
+    found: dict[str, list[tuple[str, Any]]] = field(default_factory=dict)
+
+    def info(self, provides: Mapping[str, tuple[str, ...]] | None = None) -> PluginInfo:
+        return PluginInfo(self.name, self.distribution, self.version, self.error, self.module, provides or {})
 
 
 @dataclass
 class _State:
     loaded: bool = False
+    records: list[_Record] = field(default_factory=list)
+    registry: dict[str, dict[str, Any]] | None = None
     infos: list[PluginInfo] = field(default_factory=list)
 
 
 _state = _State()
 
 
-class PluginError(LookupError):
-    """A name that is not registered; the message lists the registered ones."""
-
-
+# ------------------------------------------------------------------ loading
 def load_plugins() -> list[PluginInfo]:
-    """Load every plugin once: entry points of group ``sigcore`` unless ``SIGCORE_DISABLE_PLUGIN_AUTOLOAD`` is set.
+    """Load the installed plugins once and return :func:`plugin_infos`. Idempotent.
 
-    A plugin that fails to import or register is recorded with its error (see :func:`plugin_infos`); the others
-    still load. Idempotent.
+    Entry points of group ``sigcore`` are loaded in the order of (entry-point name, distribution), unless
+    ``SIGCORE_DISABLE_PLUGIN_AUTOLOAD`` is set. A plugin that fails to import, implements a hook that does not
+    exist, or whose registration hook raises is disabled, logged and recorded with its error; the others still
+    load.
     """
-    if _state.loaded:
-        return _state.infos
-    _state.loaded = True
-    if os.environ.get(DISABLE_ENV):
-        return _state.infos
-    for ep in importlib.metadata.entry_points(group=GROUP):
-        dist = ep.dist
-        dname, version = (dist.name, dist.version) if dist is not None else ("?", "?")
-        if pm.has_plugin(ep.name):
-            continue
-        try:
-            module = ep.load()
-            pm.register(module, name=ep.name)
-            pm.check_pending()
-        except Exception as e:  # a broken third-party plugin must not stop the others
-            if pm.has_plugin(ep.name):
-                pm.unregister(name=ep.name)
-            message = f"{type(e).__name__}: {e}"
-            _state.infos.append(PluginInfo(ep.name, dname, version, message))
-            print(f"sigcore: plugin '{ep.name}' ({dname} {version}) failed to load and is disabled: {message}",
-                  file=sys.stderr)
-            continue
-        _state.infos.append(PluginInfo(ep.name, dname, version))
-    return _state.infos
+    if not _state.loaded:
+        _state.loaded = True
+        if not os.environ.get(DISABLE_ENV):
+            found = importlib.metadata.entry_points(group=GROUP)
+            for ep in sorted(found, key=lambda ep: (ep.name, _dist(ep))):
+                _load_entry_point(ep)
+    _sync()
+    return list(_state.infos)
 
 
 def plugin_infos() -> list[PluginInfo]:
-    """Every plugin found, loaded or failed (loads them first)."""
+    """Every plugin, loaded or failed, in load order (loads them first)."""
     return load_plugins()
 
 
-def _collect(hook: Any, what: str) -> dict[str, Any]:
+def register_plugin(plugin: object, name: str | None = None) -> PluginInfo:
+    """Add a plugin from inside the process (a test, a notebook, autoload disabled) as if it were installed.
+
+    Raises:
+        PluginLoadError: the name is taken, a hook name is unknown, or a registration hook raised.
+    """
     load_plugins()
-    found: dict[str, Any] = {}
+    name = name or pm.get_canonical_name(plugin)
+    rec = _Record(name, "", "", getattr(plugin, "__name__", type(plugin).__module__))
+    if any(r.name == name for r in _state.records) or pm.has_plugin(name):
+        rec.error = f"a plugin named '{name}' is already registered"
+        raise PluginLoadError(rec.info())
+    _add(rec, plugin, keep_failed=False)
+    if rec.error is not None:
+        raise PluginLoadError(rec.info())
+    _sync()
+    return next(info for info in _state.infos if info.name == name)
 
-    def register(*args: Any) -> None:
-        if len(args) == 2:
-            name, value = args
+
+def reset_for_tests() -> None:
+    """Unregister every plugin and forget what was loaded; the next lookup discovers entry points again."""
+    for name, plugin in list(pm.list_name_plugin()):
+        if plugin is not None:
+            pm.unregister(name=name)
+    global _state
+    _state = _State()
+
+
+def _dist(ep: importlib.metadata.EntryPoint) -> tuple[str, str]:
+    dist = ep.dist
+    return (dist.name, dist.version) if dist is not None else ("", "")
+
+
+def _load_entry_point(ep: importlib.metadata.EntryPoint) -> None:
+    rec = _Record(ep.name, *_dist(ep), ep.value)
+    taken = next((r for r in _state.records if r.name == ep.name), None)
+    if taken is not None:
+        rec.error = f"entry-point name '{ep.name}' is already used by {taken.info().describe()}; rename one"
+        _state.records.append(rec)
+        log.warning("sigcore plugin %s is disabled: %s", rec.info().describe(), rec.error)
+        return
+    try:
+        plugin = ep.load()
+    except Exception as e:  # a broken third-party plugin must not stop the others
+        rec.error = f"importing '{ep.value}' raised {type(e).__name__}: {e}"
+        _state.records.append(rec)
+        log.warning("sigcore plugin %s failed to load and is disabled: %s", rec.info().describe(), rec.error)
+        return
+    _add(rec, plugin, keep_failed=True)
+
+
+def _add(rec: _Record, plugin: object, keep_failed: bool) -> None:
+    """Register ``plugin`` with pluggy, check its hooks, call its registration hooks; disable it on error."""
+    try:
+        pm.register(plugin, name=rec.name)
+    except Exception as e:  # pluggy's PluginValidationError (bad hook signature) or a duplicate object
+        rec.error = f"{type(e).__name__}: {e}"
+    else:
+        rec.error = _check_hooks(plugin) or _scan(rec, plugin)
+        if rec.error is None:
+            rec.plugin = plugin
         else:
-            (value,) = args
-            name = getattr(value, "name", None)
-            if not isinstance(name, str) or not name:
-                raise PluginError(f"{what} {value!r} has no 'name' attribute")
-        found.setdefault(name, value)
+            pm.unregister(plugin)
+    if rec.error is None or keep_failed:
+        _state.records.append(rec)
+        _state.registry = None
+    if rec.error is not None and keep_failed:
+        log.warning("sigcore plugin %s failed to load and is disabled: %s", rec.info().describe(), rec.error)
 
-    for impl in hook.get_hookimpls():
-        try:
-            impl.function(register)
-        except Exception as e:
-            print(f"sigcore: plugin '{impl.plugin_name}' failed to register {what}s: {type(e).__name__}: {e}",
-                  file=sys.stderr)
-    return found
+
+def _check_hooks(plugin: object) -> str | None:
+    """What ``pm.check_pending()`` checks, for this plugin only: every hook it implements has a spec."""
+    callers = pm.get_hookcallers(plugin) or []
+    for caller in callers:
+        if caller.has_spec():
+            continue
+        if all(impl.optionalhook for impl in caller.get_hookimpls() if impl.plugin is plugin):
+            continue
+        close = difflib.get_close_matches(caller.name, _SPECS, n=1)
+        hint = f"did you mean '{close[0]}'?" if close else f"hooks: {', '.join(_SPECS)}"
+        return f"unknown hook '{caller.name}' ({hint})"
+    implemented = {caller.name for caller in callers}
+    for name in _SPECS:
+        if name not in implemented and name in dir(plugin):
+            log.warning("sigcore plugin '%s' defines %s without @sigcore.hookimpl; it is ignored",
+                        pm.get_name(plugin), name)
+    return None
+
+
+def _scan(rec: _Record, plugin: object) -> str | None:
+    """Call the plugin's own registration hooks (not the others'); the error, or None."""
+    rec.found = {}
+    for kind, hook_name in _HOOKS.items():
+        found: list[tuple[str, Any]] = []
+        kwargs = {"register": _registrar(kind, found)}
+        for impl in getattr(pm.hook, hook_name).get_hookimpls():
+            if impl.plugin is not plugin:
+                continue
+            if impl.hookwrapper or impl.wrapper:
+                return f"{hook_name} must not be a hook wrapper"
+            try:
+                impl.function(*(kwargs[arg] for arg in impl.argnames))
+            except Exception as e:
+                return f"{hook_name} raised {type(e).__name__}: {e}"
+        rec.found[kind] = found
+    return None
+
+
+def _registrar(kind: str, found: list[tuple[str, Any]]) -> Callable[..., None]:
+    """The ``register`` callback handed to one plugin's hook: it validates what it gets."""
+    from .agent.controller import Controller
+    from .backend import Backend
+    from .feature import Feature
+    from .transport import Transport
+
+    bases: dict[str, type] = {"backend": Backend, "transport": Transport, "feature": Feature,
+                              "controller": Controller}
+    base = bases[kind]
+
+    def check(name: object, cls: object) -> None:
+        if not (isinstance(cls, type) and issubclass(cls, base)):
+            raise TypeError(f"{kind} {cls!r} is not a subclass of {base.__module__}.{base.__qualname__}")
+        if inspect.isabstract(cls):
+            missing = ", ".join(sorted(getattr(cls, "__abstractmethods__", ())))
+            raise TypeError(f"{kind} {cls.__qualname__} does not implement {missing}")
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"{kind} {cls.__qualname__} needs a non-empty name, got {name!r}")
+        found.append((name, cls))
+
+    if kind == "controller":
+        def register_controller(name: str, cls: type[Controller]) -> None:
+            check(name, cls)
+        return register_controller
+
+    def register(cls: type) -> None:
+        check(getattr(cls, "name", None), cls)
+    return register
+
+
+# ------------------------------------------------------------------ the registry
+def _sync() -> None:
+    """Follow plugins (un)registered directly through ``pm``; rebuild the registry if anything changed."""
+    live = {name: plugin for name, plugin in pm.list_name_plugin() if plugin is not None}
+    dirty = _state.registry is None
+    kept = [r for r in _state.records if r.plugin is None or live.get(r.name) is r.plugin]
+    dirty |= len(kept) != len(_state.records)
+    known = {r.name for r in kept if r.plugin is not None}
+    for name, plugin in live.items():
+        if name not in known:
+            rec = _Record(name, "", "", getattr(plugin, "__name__", type(plugin).__module__))
+            rec.error = _check_hooks(plugin) or _scan(rec, plugin)
+            if rec.error is None:
+                rec.plugin = plugin
+            else:
+                pm.unregister(plugin)
+                log.warning("sigcore plugin %s failed to load and is disabled: %s", rec.info().describe(),
+                            rec.error)
+            kept.append(rec)
+            dirty = True
+    _state.records = kept
+    if dirty:
+        _rebuild()
+
+
+def _rebuild() -> None:
+    registry: dict[str, dict[str, Any]] = {kind: {} for kind in KINDS}
+    owners: dict[tuple[str, str], _Record] = {}
+    infos = []
+    for rec in _state.records:
+        provides: dict[str, tuple[str, ...]] = {}
+        for kind in KINDS:
+            names = []
+            for name, value in rec.found.get(kind, []) if rec.error is None else []:
+                first = owners.get((kind, name))
+                if first is None:
+                    registry[kind][name] = value
+                    owners[kind, name] = rec
+                    names.append(name)
+                elif registry[kind][name] is not value:
+                    log.warning("%s '%s' of sigcore plugin %s is ignored: plugin %s registered it first",
+                                kind, name, rec.info().describe(), first.info().describe())
+            if names:
+                provides[kind] = tuple(names)
+        infos.append(rec.info(provides))
+    _state.registry = registry
+    _state.infos = infos
+
+
+def _registry(kind: str) -> dict[str, Any]:
+    load_plugins()
+    assert _state.registry is not None
+    return _state.registry[kind]
+
+
+def _get(kind: str, name: str) -> Any:
+    found = _registry(kind)
+    if name not in found:
+        raise PluginError(kind, name, sorted(found), [i for i in _state.infos if i.error is not None])
+    return found[name]
 
 
 def backends() -> dict[str, type[Backend]]:
     """Registered backend classes by name."""
-    return _collect(pm.hook.sigcore_register_backends, "backend")
+    return dict(_registry("backend"))
 
 
 def transports() -> dict[str, type[Transport]]:
     """Registered transport classes by name."""
-    return _collect(pm.hook.sigcore_register_transports, "transport")
+    return dict(_registry("transport"))
 
 
 def features() -> dict[str, type[Feature]]:
     """Registered feature classes by name (enabled per world with ``<plugin name=...>``)."""
-    return _collect(pm.hook.sigcore_register_features, "feature")
+    return dict(_registry("feature"))
 
 
 def controllers() -> dict[str, type[Any]]:
-    """Registered controller classes by short name."""
-    return _collect(pm.hook.sigcore_register_controllers, "controller")
+    """Registered controller classes by short name (a world attaches one with ``controller="name"``)."""
+    return dict(_registry("controller"))
 
 
 def get_backend(name: str) -> type[Backend]:
     """The backend class called ``name``.
 
     Raises:
-        PluginError: not registered; the message lists the registered backends and how to install one.
+        PluginError: not registered; the message lists the registered backends and the failed plugins.
     """
-    found = backends()
-    if name not in found:
-        valid = ", ".join(sorted(found)) or "none installed"
-        raise PluginError(f"backend '{name}' is not registered; available: {valid} "
-                          f"(install one, e.g. pip install sigcore-backend-{name})")
-    return found[name]
+    return _get("backend", name)
 
 
 def get_transport(name: str) -> type[Transport]:
     """The transport class called ``name``; :class:`PluginError` listing the valid ones otherwise."""
-    found = transports()
-    if name not in found:
-        valid = ", ".join(sorted(found)) or "none installed"
-        raise PluginError(f"transport '{name}' is not registered; available: {valid}")
-    return found[name]
+    return _get("transport", name)
 
 
-def reset_for_tests() -> None:
-    """Forget loaded plugins (tests that install fake distributions call this)."""
-    for name, plugin in list(pm.list_name_plugin()):
-        if plugin is not None:
-            pm.unregister(name=name)
-    _state.loaded = False
-    _state.infos = []
+def get_feature(name: str) -> type[Feature]:
+    """The feature class called ``name``; :class:`PluginError` listing the valid ones otherwise."""
+    return _get("feature", name)
+
+
+def add_commands(cli: Any) -> None:
+    """Call every loaded plugin's ``sigcore_register_commands(cli)``; one that raises is logged by name and
+    the others still add theirs."""
+    infos = {i.name: i for i in load_plugins()}
+    for impl in pm.hook.sigcore_register_commands.get_hookimpls():
+        try:
+            impl.function(*({"cli": cli}[arg] for arg in impl.argnames))
+        except Exception as e:
+            who = infos[impl.plugin_name].describe() if impl.plugin_name in infos else f"'{impl.plugin_name}'"
+            log.warning("sigcore plugin %s: sigcore_register_commands raised %s: %s; its commands are "
+                        "missing", who, type(e).__name__, e)
+
+
+def notify(hook: str, **kwargs: Any) -> None:
+    """Call world-level event hook ``hook`` (e.g. ``sigcore_simulation_started``) on every plugin, one by one: a
+    plugin whose hook raises is logged by name and the others are still called; the simulation goes on."""
+    load_plugins()
+    for impl in getattr(pm.hook, hook).get_hookimpls():
+        try:
+            impl.function(**{k: v for k, v in kwargs.items() if k in impl.argnames})
+        except Exception as e:
+            log.error("plugin '%s' raised in %s: %s: %s", impl.plugin_name, hook, type(e).__name__, e)

@@ -101,7 +101,7 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
     finally:
         if transport is not None:
             transport.stop()
-        plugins.pm.hook.sigcore_simulation_stopped(simulation=sim)
+        plugins.notify("sigcore_simulation_stopped", simulation=sim)
     wall = _time.perf_counter() - wall0
     kinds: dict[str, list[str]] = {}
     for name, handle in sim.agents.items():

@@ -119,19 +119,16 @@ class Simulation:
         self.dispatch.add(self.agent(agent), controller)
 
     def _create_features(self) -> None:
-        if not self.world.plugins:
-            return
-        available = plugins.features()
         issues = []
         for cfg in self.world.plugins:
-            cls = available.get(cfg.name)
-            if cls is None:
-                issues.append(self._issue("", "name", f"plugin '{cfg.name}' is not installed; installed features: "
-                                          f"{', '.join(sorted(available)) or 'none'}", cfg.line))
+            try:
+                cls = plugins.get_feature(cfg.name)
+            except plugins.PluginError as e:
+                issues.append(self._issue("", "name", str(e), cfg.line))
                 continue
             try:
                 self.features[cfg.name] = cls(self, dict(cfg.config))
-            except (ValueError, KeyError) as e:
+            except (ValueError, KeyError, TypeError) as e:
                 issues.append(self._issue("", None, f"plugin '{cfg.name}': {e}", cfg.line))
         if issues:
             raise WorldError(issues)
@@ -283,7 +280,7 @@ class Simulation:
         self._started = True
         self.dispatch.init(self.time)
         self.dispatch.actions(self.step_count, self.time)
-        plugins.pm.hook.sigcore_simulation_started(simulation=self)
+        plugins.notify("sigcore_simulation_started", simulation=self)
 
     def step(self, n: int = 1) -> None:
         """Advance ``n`` fixed steps: messages, forces, physics, contacts, controllers, sensors, observers."""
