@@ -20,6 +20,7 @@ from .parser import parse_world
 from .urdf import UrdfError, UrdfJoint, UrdfModel, read_urdf
 
 __all__ = [
-    "Arm", "BareAgent", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "Object", "PluginConfig", "Pose",
-    "Robot", "UrdfError", "UrdfJoint", "UrdfModel", "World", "WorldError", "WorldIssue", "parse_world", "read_urdf",
+    "Arm", "BareAgent", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "Object", "PluginConfig",
+    "Pose", "Robot", "UrdfError", "UrdfJoint", "UrdfModel", "World", "WorldError", "WorldIssue",
+    "parse_world", "read_urdf",
 ]

@@ -47,3 +47,15 @@ class WorldError(ValueError):
     def __init__(self, issues: list[WorldIssue]) -> None:
         self.issues = issues
         super().__init__("\n".join(str(i) for i in issues))
+
+
+class FieldError(ValueError):
+    """Raised by a cross-field validator of a model to blame one field (the parser points at that attribute).
+
+    Attributes:
+        field: The field (XML attribute) that is wrong.
+    """
+
+    def __init__(self, field: str, message: str) -> None:
+        self.field = field
+        super().__init__(message)

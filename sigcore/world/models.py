@@ -11,7 +11,17 @@ import re
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    field_validator,
+    model_validator,
+)
+
+from .exceptions import FieldError
 
 NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]*$"
 """Entity names become ROS 2 topic names (``<agent>_setPosition``): a letter, then letters, digits, ``_``."""
@@ -24,8 +34,12 @@ def _numbers(count: int | None) -> BeforeValidator:
             try:
                 numbers = tuple(float(p) for p in parts)
             except ValueError:
-                raise ValueError(f"expected numbers separated by spaces, got {value!r}") from None
-            value = numbers
+                raise ValueError(f"{value!r} is not numbers separated by spaces") from None
+            if count is not None and len(numbers) != count:
+                raise ValueError(f"expected {count} numbers, got {len(numbers)} ({value!r})")
+            if not all(math.isfinite(n) for n in numbers):
+                raise ValueError(f"numbers must be finite, got {value!r}")
+            return numbers
         if isinstance(value, tuple | list):
             if count is not None and len(value) != count:
                 raise ValueError(f"expected {count} numbers, got {len(value)}")
@@ -37,10 +51,18 @@ def _numbers(count: int | None) -> BeforeValidator:
     return BeforeValidator(parse)
 
 
-def _finite(value: float) -> float:
-    if not math.isfinite(value):
-        raise ValueError(f"must be a finite number, got {value}")
-    return value
+_CONTROLLER = "'package.module:Class' or a registered controller name"
+
+_FULL_TURN_SLACK = 1e-3
+"""``fov`` values up to 2π + this [rad] are taken as 2π, so that ``fov="6.2832"`` means a full turn."""
+
+
+def _full_turn(value: object) -> object:
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return value  # pydantic reports it
+    return 2 * math.pi if 2 * math.pi < number <= 2 * math.pi + _FULL_TURN_SLACK else value
 
 
 Vec3 = Annotated[tuple[float, float, float], _numbers(3)]
@@ -52,7 +74,7 @@ Tags = Annotated[tuple[str, ...], BeforeValidator(lambda v: tuple(v.split()) if 
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, str_strip_whitespace=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, str_strip_whitespace=True, allow_inf_nan=False)
 
 
 class Pose(_Model):
@@ -67,14 +89,16 @@ class Pose(_Model):
         if isinstance(value, str):
             parts = value.split()
             if len(parts) not in (3, 6):
-                raise ValueError(f"expected 'x y z' or 'x y z roll pitch yaw' (6 numbers), got {value!r}")
+                raise ValueError(f"expected 3 or 6 numbers, got {len(parts)} ({value!r}); "
+                                 "valid: 'x y z' or 'x y z roll pitch yaw'")
             try:
                 numbers = [float(p) for p in parts]
             except ValueError:
-                raise ValueError(f"expected numbers separated by spaces, got {value!r}") from None
+                raise ValueError(f"{value!r} is not numbers separated by spaces") from None
             if not all(math.isfinite(n) for n in numbers):
                 raise ValueError(f"numbers must be finite, got {value!r}")
-            return cls(xyz=tuple(numbers[:3]), rpy=tuple(numbers[3:]) if len(numbers) == 6 else (0.0, 0.0, 0.0))
+            rpy = (numbers[3], numbers[4], numbers[5]) if len(numbers) == 6 else (0.0, 0.0, 0.0)
+            return cls(xyz=(numbers[0], numbers[1], numbers[2]), rpy=rpy)
         return value
 
 
@@ -87,7 +111,7 @@ class PluginConfig(_Model):
     Every other attribute is passed to the plugin as a string; the plugin validates it.
     """
 
-    name: Name
+    name: Name = Field(description="plugin to enable, e.g. 'slam'")
     config: dict[str, str] = Field(default_factory=dict)
     line: int = 0
 
@@ -107,11 +131,16 @@ class Drive(_Model):
 class Lidar(_Model):
     """``<lidar>``: a planar laser scanner on one link, rays in the link's x-y plane, counter-clockwise."""
 
-    name: Name
+    name: Name = Field(description="scanner name, unique within the robot")
     link: str = Field(description="URDF link the scanner sits on")
-    beams: int = Field(default=360, ge=1, le=10000)
-    fov: float = Field(default=2 * math.pi, gt=0, le=2 * math.pi, description="field of view in [rad]")
-    range: Annotated[tuple[float, float], _numbers(2)] = (0.05, 10.0)
+    beams: int = Field(default=360, ge=1, le=10000, description="rays per scan")
+    fov: Annotated[float, BeforeValidator(_full_turn)] = Field(
+        default=2 * math.pi, gt=0, le=2 * math.pi,
+        description="field of view in [rad] (up to 2π + 0.001 means 2π)",
+    )
+    range: Annotated[tuple[float, float], _numbers(2)] = Field(
+        default=(0.05, 10.0), description="'min max' distance in [m]"
+    )
     rate: float = Field(default=10.0, gt=0, le=1000, description="scans per simulated second in [Hz]")
     noise: float = Field(default=0.0, ge=0, le=1, description="Gaussian range noise std-dev in [m]")
 
@@ -119,7 +148,8 @@ class Lidar(_Model):
     @classmethod
     def _range(cls, v: tuple[float, float]) -> tuple[float, float]:
         if not 0 <= v[0] < v[1]:
-            raise ValueError(f"expected 'min max' with 0 <= min < max, got {v[0]} {v[1]}")
+            raise ValueError(f"min {v[0]:g} and max {v[1]:g} do not satisfy 0 <= min < max; "
+                             "valid: 'min max' [m], e.g. '0.05 10'")
         return v
 
 
@@ -128,15 +158,16 @@ class Gripper(_Model):
 
     part: str = Field(description="URDF link that holds grasped objects")
     grasp_radius: float = Field(default=0.1, gt=0, le=2, description="max distance part origin to object [m]")
-    side: Literal["left", "right"] | None = Field(default=None, description="which arm, for sig_ros 'arm' names")
+    side: Literal["left", "right"] | None = Field(default=None,
+                                                  description="which arm, for sig_ros 'arm' names")
 
 
 class Arm(_Model):
     """``<arm>``: a kinematic chain from ``base`` link to ``tip`` link (used by IK)."""
 
-    name: Name
-    base: str
-    tip: str
+    name: Name = Field(description="arm name, unique within the robot")
+    base: str = Field(description="URDF link where the chain starts")
+    tip: str = Field(description="URDF link where the chain ends")
 
 
 class Gains(_Model):
@@ -151,17 +182,17 @@ class Robot(_Model):
     """``<robot>``: an articulated body from a URDF file."""
 
     kind: Literal["robot"] = "robot"
-    name: Name
-    urdf: Path
-    pose: PoseField = Pose()
-    controller: str | None = None
+    name: Name = Field(description="unique agent name; prefixes its ROS 2 topics")
+    urdf: Path = Field(description="URDF file, relative to the world file's directory")
+    pose: PoseField = Field(default=Pose(), description="'x y z' [m] or 'x y z roll pitch yaw' [m, rad]")
+    controller: str | None = Field(default=None, description=_CONTROLLER)
     fixed: bool = Field(default=False, description="root link welded to the world")
     drive: Drive | None = None
     lidars: tuple[Lidar, ...] = ()
     grippers: tuple[Gripper, ...] = ()
     arms: tuple[Arm, ...] = ()
     gains: Gains = Gains()
-    tags: Tags = ()
+    tags: Tags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
 
 
 Shape = Literal["box", "sphere", "cylinder", "capsule"]
@@ -178,41 +209,51 @@ class Object(_Model):
     """``<object>``: a rigid body: a primitive shape, a mesh, or a URDF model."""
 
     kind: Literal["object"] = "object"
-    name: Name
-    shape: Shape | None = None
-    size: Floats | None = None
-    mesh: Path | None = None
-    urdf: Path | None = None
-    scale: Annotated[float, Field(gt=0)] = 1.0
+    name: Name = Field(description="unique agent name; prefixes its ROS 2 topics")
+    shape: Shape | None = Field(default=None, description="primitive shape")
+    size: Floats | None = Field(default=None, description="sizes of the shape in [m]")
+    mesh: Path | None = Field(default=None, description="mesh file, relative to the world file's directory")
+    urdf: Path | None = Field(default=None, description="URDF file, relative to the world file's directory")
+    scale: float = Field(default=1.0, gt=0, description="mesh or URDF scale factor (not for shapes)")
     mass: float = Field(default=1.0, gt=0, le=1e5, description="in [kg] (ignored when static)")
-    static: bool = False
-    graspable: bool = False
-    tags: Tags = ()
-    pose: PoseField = Pose()
-    color: Vec4 = (0.7, 0.7, 0.7, 1.0)
+    static: bool = Field(default=False, description="fixed in place, not moved by physics")
+    graspable: bool = Field(default=False, description="grippers may grasp it")
+    tags: Tags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
+    pose: PoseField = Field(default=Pose(), description="'x y z' [m] or 'x y z roll pitch yaw' [m, rad]")
+    color: Vec4 = Field(default=(0.7, 0.7, 0.7, 1.0), description="'r g b a', each from 0 to 1")
     friction: float = Field(default=1.0, ge=0, le=10, description="sliding friction coefficient")
-    controller: str | None = None
+    controller: str | None = Field(default=None, description=_CONTROLLER)
+
+    @field_validator("color")
+    @classmethod
+    def _color(cls, v: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+        if not all(0 <= c <= 1 for c in v):
+            got = " ".join(f"{c:g}" for c in v)
+            raise ValueError(f"components must be in [0, 1], got {got}; valid: 'r g b a'")
+        return v
 
     @model_validator(mode="after")
     def _geometry(self) -> Object:
         given = [k for k in ("shape", "mesh", "urdf") if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError(
-                "exactly one of 'shape', 'mesh' or 'urdf' is required"
-                + (f", got {', '.join(given)}" if given else "")
-            )
+        if not given:
+            raise ValueError("no geometry; valid: one of 'shape' (with 'size'), 'mesh' or 'urdf'")
+        if len(given) > 1:
+            raise FieldError(given[1], f"'{given[0]}' and '{given[1]}' are both given; an object has "
+                                       "exactly one of 'shape', 'mesh' or 'urdf'")
         if self.shape is not None:
             if self.size is None:
-                raise ValueError(f"shape '{self.shape}' needs size={_SIZE_HELP[self.shape]}")
+                raise ValueError(f"shape '{self.shape}' needs 'size'; valid: {_SIZE_HELP[self.shape]}")
             if len(self.size) != _SIZE_COUNT[self.shape]:
-                raise ValueError(
-                    f"size of a {self.shape} is {_SIZE_HELP[self.shape]}: "
-                    f"{_SIZE_COUNT[self.shape]} numbers, got {len(self.size)}"
-                )
+                raise FieldError("size", f"expected {_SIZE_COUNT[self.shape]} numbers for a {self.shape}, "
+                                         f"got {len(self.size)}; valid: {_SIZE_HELP[self.shape]} [m]")
             if any(s <= 0 for s in self.size):
-                raise ValueError(f"sizes must be > 0 [m], got {' '.join(str(s) for s in self.size)}")
+                got = " ".join(f"{s:g}" for s in self.size)
+                raise FieldError("size", f"sizes must be > 0 [m], got {got}")
+            if "scale" in self.model_fields_set:
+                raise FieldError("scale", f"'scale' is only for 'mesh' and 'urdf' objects; a {self.shape} is "
+                                          f"sized by 'size' ({_SIZE_HELP[self.shape]})")
         elif self.size is not None:
-            raise ValueError("'size' is only for primitive shapes; meshes use 'scale'")
+            raise FieldError("size", f"'size' is only for primitive shapes; a {given[0]} object uses 'scale'")
         return self
 
 
@@ -220,21 +261,21 @@ class Human(_Model):
     """``<human>``: a person, modelled as a standing capsule with a head (kinematic unless told otherwise)."""
 
     kind: Literal["human"] = "human"
-    name: Name
-    pose: PoseField = Pose()
+    name: Name = Field(description="unique agent name; prefixes its ROS 2 topics")
+    pose: PoseField = Field(default=Pose(), description="'x y z' [m] or 'x y z roll pitch yaw' [m, rad]")
     height: float = Field(default=1.7, gt=0.3, le=2.5, description="in [m]")
     mass: float = Field(default=70.0, gt=0, le=500, description="in [kg]")
     static: bool = Field(default=True, description="held in place (moved only through the API)")
-    controller: str | None = None
-    tags: Tags = ()
+    controller: str | None = Field(default=None, description=_CONTROLLER)
+    tags: Tags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
 
 
 class BareAgent(_Model):
     """``<agent>``: an agent with no body, e.g. a moderator."""
 
     kind: Literal["agent"] = "agent"
-    name: Name
-    controller: str | None = None
+    name: Name = Field(description="unique agent name; prefixes its ROS 2 topics")
+    controller: str | None = Field(default=None, description=_CONTROLLER)
 
 
 Entity = Robot | Object | Human
@@ -244,9 +285,9 @@ AgentModel = Robot | Object | Human | BareAgent
 class World(_Model):
     """``<world>``: the root element."""
 
-    name: Name = "world"
+    name: Name = Field(default="world", description="world name")
     timestep: float = Field(default=0.002, gt=0, le=0.1, description="physics step in [s]")
-    gravity: Vec3 = (0.0, 0.0, -9.81)
+    gravity: Vec3 = Field(default=(0.0, 0.0, -9.81), description="'x y z' acceleration in [m/s^2]")
     seed: int = Field(default=0, ge=0, description="seed of sensor noise")
     plugins: tuple[PluginConfig, ...] = ()
     agents: tuple[AgentModel, ...] = ()
@@ -254,7 +295,7 @@ class World(_Model):
     _locations: dict[tuple[str, str | None], tuple[int, int]] = PrivateAttr(default_factory=dict)
 
     def location(self, agent: str, attribute: str | None = None) -> tuple[int, int]:
-        """``(line, column)`` of an agent's element (or one of its attributes) in the world file; (0, 0) if unknown."""
+        """``(line, column)`` of an agent's element (or of one of its attributes); (0, 0) if unknown."""
         return self._locations.get((agent, attribute), self._locations.get((agent, None), (0, 0)))
 
     @property

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -10,6 +12,7 @@ from pydantic import BaseModel, ValidationError
 
 from .exceptions import WorldError, WorldIssue
 from .locate import SourceMap
+from .messages import error_field, message, unknown
 from .models import (
     Arm,
     BareAgent,
@@ -23,7 +26,7 @@ from .models import (
     Robot,
     World,
 )
-from .urdf import UrdfError, read_urdf
+from .urdf import UrdfError, UrdfModel, read_urdf
 
 _AGENTS: dict[str, type[BaseModel]] = {"robot": Robot, "object": Object, "human": Human, "agent": BareAgent}
 _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
@@ -34,8 +37,9 @@ _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
     "arm": (Arm, "arms", True),
     "gains": (Gains, "gains", False),
 }
-_INTERNAL_FIELDS = {"kind", "lidars", "grippers", "arms", "drive", "gains", "plugins", "agents", "source", "config",
-                    "line"}
+_INTERNAL_FIELDS = {"kind", "lidars", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
+                    "config", "line"}
+_LIBXML_POSITION = re.compile(r", line \d+, column \d+$")
 
 
 class _Reader:
@@ -49,46 +53,52 @@ class _Reader:
         line, col = self.map.attribute(element, attribute) if attribute else self.map.element(element)
         self.issues.append(WorldIssue(self.path, line, col, str(element.tag), attribute, message))
 
+    def line(self, element: etree._Element) -> int:
+        return self.map.element(element)[0]
+
     def attributes(self, element: etree._Element, model: type[BaseModel]) -> dict[str, Any]:
-        fields = set(model.model_fields) - _INTERNAL_FIELDS
+        fields = sorted(set(model.model_fields) - _INTERNAL_FIELDS)
         out: dict[str, Any] = {}
         for key, value in element.attrib.items():
             key = str(key)
             if key not in fields:
-                self.issue(element, key, f"unknown attribute; valid: {', '.join(sorted(fields))}")
+                self.issue(element, key, unknown("attribute", key, fields))
             else:
-                out[key] = value
+                out[key] = str(value)
         return out
 
     def build(self, element: etree._Element, model: type[BaseModel], extra: dict[str, Any]) -> Any:
-        """Validate ``element``'s attributes (plus ``extra`` children fields) into ``model``; None on error."""
+        """``element``'s attributes and ``extra`` (fields from children) as a ``model``; None on error."""
         data = self.attributes(element, model)
         try:
             return model.model_validate({**data, **extra})
         except ValidationError as e:
             for err in e.errors():
-                loc = [str(p) for p in err["loc"]]
-                attribute = loc[0] if loc and loc[0] in data else None
-                msg = err["msg"].removeprefix("Value error, ")
-                if err["type"] == "missing":
-                    msg = f"required attribute '{loc[0]}' is missing"
-                elif attribute is not None and "got " not in msg:
-                    msg = f"{msg} (got {data[attribute]!r})"
-                self.issue(element, attribute, msg)
+                field = error_field(err)
+                attribute = field if field in data else None
+                self.issue(element, attribute, message(model, err, data.get(field) if field else None))
             return None
 
     def children_of(self, element: etree._Element, allowed: dict[str, Any]) -> list[etree._Element]:
+        """The child elements of ``element`` whose tag is in ``allowed``; reports the others and any text."""
         out = []
         for child in element:
             if not isinstance(child.tag, str):
                 continue  # comments, processing instructions
-            if child.tag not in allowed:
-                self.issue(child, None, f"unknown element inside <{element.tag}>; valid: {', '.join(allowed)}")
-            else:
+            if child.tag in allowed:
                 out.append(child)
-        if element.text and element.text.strip():
-            self.issue(element, None, f"unexpected text {element.text.strip()[:30]!r}; <{element.tag}> holds "
-                                      "only elements")
+            elif allowed:
+                what = f"element inside <{element.tag}>"
+                self.issue(child, None, unknown(what, str(child.tag), list(allowed)))
+            else:
+                self.issue(child, None, f"unexpected element; <{element.tag}> has no child elements, only "
+                                        "attributes")
+        texts = [t.strip() for t in [element.text, *(c.tail for c in element)] if t and t.strip()]
+        if texts:
+            line, col = self.map.text(element)
+            holds = "only elements" if allowed else "no text; write values as attributes"
+            says = f"unexpected text {texts[0][:30]!r}; <{element.tag}> holds {holds}"
+            self.issues.append(WorldIssue(self.path, line, col, str(element.tag), None, says))
         return out
 
 
@@ -103,41 +113,55 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
         The validated world.
 
     Raises:
-        WorldError: with every problem found, each located at ``file:line:column``.
+        WorldError: with every problem found, each located at ``file:line:column``, sorted by line.
     """
     path = Path(path)
     if text is None:
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as e:
-            raise WorldError([WorldIssue(path, 1, 1, None, None, f"cannot read world file: {e.strerror}")]) from None
+        text = _read(path)
     try:
         root = etree.fromstring(text.encode("utf-8"), parser=etree.XMLParser(resolve_entities=False))
     except etree.XMLSyntaxError as e:
         line, col = e.position
-        raise WorldError([WorldIssue(path, line, col, None, None, f"not well-formed XML: {e.msg}")]) from None
+        msg = _LIBXML_POSITION.sub("", str(e.msg))
+        raise WorldError([WorldIssue(path, line, col, None, None, f"not well-formed XML: {msg}")]) from None
     reader = _Reader(path, text, root)
     if root.tag != "world":
-        reader.issue(root, None, "the root element must be <world>")
+        reader.issue(root, None, f"the root element is <{root.tag}>; valid: <world>")
         raise WorldError(reader.issues)
     agents: list[Any] = []
-    plugins: list[PluginConfig] = []
+    plugins: list[Any] = []
     for child in reader.children_of(root, {"plugin": 1, **_AGENTS}):
         if child.tag == "plugin":
             plugin = _plugin(reader, child)
             if plugin is not None:
-                plugins.append(plugin)
+                plugins.append((child, plugin))
             continue
         agent = _agent(reader, child, path.parent)
         if agent is not None:
             agents.append((child, agent))
-    _check_names(reader, agents, plugins)
-    world = reader.build(root, World, {"agents": tuple(a for _, a in agents), "plugins": tuple(plugins),
-                                       "source": path})
+    _unique(reader, agents, "name", "every agent needs its own name")
+    _unique(reader, plugins, "name", "enable a plugin once")
+    world = reader.build(root, World, {"agents": tuple(a for _, a in agents),
+                                       "plugins": tuple(p for _, p in plugins), "source": path})
     if reader.issues or world is None:
         raise WorldError(sorted(reader.issues, key=lambda i: (i.line, i.column)))
     world._locations.update(reader.locations)
     return world
+
+
+def _read(path: Path) -> str:
+    try:
+        data = path.read_bytes()
+    except OSError as e:
+        issue = WorldIssue(path, 1, 1, None, None, f"cannot read world file: {e.strerror}")
+        raise WorldError([issue]) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        col = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        raise WorldError([WorldIssue(path, line, col, None, None, f"byte 0x{data[e.start]:02x} is not UTF-8; "
+                                     "valid: a file saved as UTF-8")]) from None
 
 
 def _plugin(reader: _Reader, element: etree._Element) -> PluginConfig | None:
@@ -145,13 +169,14 @@ def _plugin(reader: _Reader, element: etree._Element) -> PluginConfig | None:
     attrs = {str(k): str(v) for k, v in element.attrib.items()}
     name = attrs.pop("name", None)
     if name is None:
-        reader.issue(element, None, "required attribute 'name' is missing (the plugin to enable, e.g. 'slam')")
+        reader.issue(element, None, "required attribute 'name' is missing (the plugin to enable, "
+                                    "e.g. 'slam')")
         return None
-    line, _ = reader.map.element(element)
     try:
-        return PluginConfig(name=name, config=attrs, line=line)
+        return PluginConfig(name=name, config=attrs, line=reader.line(element))
     except ValidationError as e:
-        reader.issue(element, "name", e.errors()[0]["msg"] + f" (got {name!r})")
+        for err in e.errors():
+            reader.issue(element, "name", message(PluginConfig, err, name))
         return None
 
 
@@ -159,90 +184,91 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
     tag = str(element.tag)
     model = _AGENTS[tag]
     extra: dict[str, Any] = {}
+    children: dict[str, list[Any]] = {"drive": [], "lidars": [], "grippers": [], "arms": [], "gains": []}
     if tag == "robot":
-        many: dict[str, list[Any]] = {"lidars": [], "grippers": [], "arms": []}
+        first: dict[str, etree._Element] = {}
         for child in reader.children_of(element, _ROBOT_CHILDREN):
             sub_model, field, is_many = _ROBOT_CHILDREN[str(child.tag)]
             reader.children_of(child, {})
-            value = reader.build(child, sub_model, {})
-            if value is None:
+            if not is_many and field in first:
+                reader.issue(child, None, f"<{child.tag}> may appear only once in a <robot> (first on line "
+                                          f"{reader.line(first[field])})")
                 continue
-            if is_many:
-                many[field].append((child, value))
-            elif field in extra:
-                reader.issue(child, None, f"<{child.tag}> may appear only once in a <robot>")
-            else:
-                extra[field] = value
-        extra.update({k: tuple(v for _, v in items) for k, items in many.items()})
-        agent = reader.build(element, model, extra)
-        if agent is not None:
-            _check_robot(reader, element, agent, many, base)
+            first[field] = child
+            value = reader.build(child, sub_model, {})
+            if value is not None:
+                children[field].append((child, value))
+        for field, items in children.items():
+            values = tuple(v for _, v in items)
+            if field in ("lidars", "grippers", "arms"):
+                extra[field] = values
+            elif values:
+                extra[field] = values[0]
     else:
         reader.children_of(element, {})
-        agent = reader.build(element, model, {})
-        if isinstance(agent, Object):
-            for attr in ("mesh", "urdf"):
-                file = getattr(agent, attr)
-                if file is not None and not (base / file).is_file():
-                    reader.issue(element, attr, f"file not found: {base / file}")
+    agent = reader.build(element, model, extra)
+    if tag in ("robot", "object"):
+        _check_files(reader, element, base, children)
+    _unique(reader, children["lidars"], "name", "each lidar of a robot needs its own name")
+    _unique(reader, children["grippers"], "part", "one gripper per part")
+    _unique(reader, children["arms"], "name", "each arm of a robot needs its own name")
     if agent is not None:
         reader.locations[(agent.name, None)] = reader.map.element(element)
-        if getattr(agent, "controller", None) is not None:
-            reader.locations[(agent.name, "controller")] = reader.map.attribute(element, "controller")
+        for key in element.attrib:
+            reader.locations[(agent.name, str(key))] = reader.map.attribute(element, str(key))
     return agent
 
 
-def _check_robot(reader: _Reader, element: etree._Element, robot: Robot,
-                 children: dict[str, list[Any]], base: Path) -> None:
-    path = base / robot.urdf
-    if not path.is_file():
-        reader.issue(element, "urdf", f"file not found: {path}")
-        return
-    try:
-        urdf = read_urdf(path)
-    except UrdfError as e:
-        reader.issue(element, "urdf", str(e))
-        return
-    links = set(urdf.links)
-    movable = {j.name for j in urdf.movable_joints}
-    drive = next((c for c in element if c.tag == "drive"), None)
-    if robot.drive is not None and drive is not None:
+def _check_files(reader: _Reader, element: etree._Element, base: Path,
+                 children: dict[str, list[Any]]) -> None:
+    """Check that ``urdf``/``mesh`` files exist, that a URDF reads, and the names a robot takes from it."""
+    for attr in ("urdf",) if element.tag == "robot" else ("urdf", "mesh"):
+        raw = element.get(attr)
+        if raw is None:
+            continue
+        if not raw.strip():
+            reader.issue(element, attr, "empty path; valid: a file path, relative to the world file's "
+                                        "directory")
+            continue
+        file = Path(os.path.normpath(base / raw.strip()))
+        if not file.is_file():
+            relative = "" if Path(raw.strip()).is_absolute() else \
+                " (relative paths start at the world file's directory)"
+            reader.issue(element, attr, f"file not found: {file}{relative}")
+        elif attr == "urdf":
+            try:
+                urdf = read_urdf(file)
+            except UrdfError as e:
+                reader.issue(element, attr, f"invalid URDF: {e}")
+                continue
+            if element.tag == "robot":
+                _check_robot(reader, urdf, raw.strip(), children)
+
+
+def _check_robot(reader: _Reader, urdf: UrdfModel, file: str, children: dict[str, list[Any]]) -> None:
+    """Check the names that a robot's child elements take from its URDF."""
+    movable = sorted(j.name for j in urdf.movable_joints)
+    for child, drive in children["drive"]:
         for attr in ("left", "right"):
-            joint = getattr(robot.drive, attr)
+            joint = getattr(drive, attr)
             if joint not in movable:
-                reader.issue(drive, attr, f"no movable joint '{joint}' in {robot.urdf}; joints: "
-                                          f"{', '.join(sorted(movable))}")
+                reader.issue(child, attr, f"no movable joint '{joint}' in {file}; "
+                                          f"valid: {', '.join(movable)}")
     checks = (("lidars", "link"), ("grippers", "part"), ("arms", "base"), ("arms", "tip"))
     for field, attr in checks:
         for child, value in children[field]:
             link = getattr(value, attr)
-            if link not in links:
-                reader.issue(child, attr, f"no link '{link}' in {robot.urdf}; links: {', '.join(urdf.links)}")
-    _unique(reader, children["lidars"], "name")
-    _unique(reader, children["grippers"], "part")
-    _unique(reader, children["arms"], "name")
+            if link not in urdf.links:
+                reader.issue(child, attr, f"no link '{link}' in {file}; valid: {', '.join(urdf.links)}")
 
 
-def _unique(reader: _Reader, items: list[Any], attr: str) -> None:
-    seen: set[str] = set()
-    for child, value in items:
+def _unique(reader: _Reader, items: list[Any], attr: str, rule: str) -> None:
+    """Report every item whose ``attr`` repeats an earlier one's, pointing at the first."""
+    first: dict[str, etree._Element] = {}
+    for element, value in items:
         key = getattr(value, attr)
-        if key in seen:
-            reader.issue(child, attr, f"duplicate {attr} '{key}'")
-        seen.add(key)
-
-
-def _check_names(reader: _Reader, agents: list[Any], plugins: list[PluginConfig]) -> None:
-    seen: dict[str, int] = {}
-    for element, agent in agents:
-        if agent.name in seen:
-            reader.issue(element, "name", f"duplicate name '{agent.name}' (first used on line {seen[agent.name]}); "
-                                          "every agent needs its own name")
+        if key in first:
+            line = reader.line(first[key])
+            reader.issue(element, attr, f"duplicate {attr} '{key}' (first on line {line}); {rule}")
         else:
-            seen[agent.name] = reader.map.element(element)[0]
-    names = set()
-    for plugin in plugins:
-        if plugin.name in names:
-            reader.issues.append(WorldIssue(reader.path, plugin.line, 1, "plugin", "name",
-                                            f"plugin '{plugin.name}' is enabled twice"))
-        names.add(plugin.name)
+            first[key] = element

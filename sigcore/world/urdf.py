@@ -5,6 +5,7 @@ Physics engines load the URDF themselves; this only gives the core the names it 
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -69,11 +70,12 @@ def read_urdf(path: Path) -> UrdfModel:
         UrdfError: the file is missing, not XML, or not a consistent tree.
     """
     try:
-        root = etree.parse(str(path)).getroot()
-    except OSError as e:
-        raise UrdfError(path, 0, f"cannot read: {e}") from None
-    except etree.XMLSyntaxError as e:
-        raise UrdfError(path, e.lineno or 0, f"not valid XML: {e.msg}") from None
+        root = etree.parse(str(path), etree.XMLParser(resolve_entities=False, no_network=True)).getroot()
+    except OSError as err:
+        raise UrdfError(path, 0, f"cannot read: {err}") from None
+    except etree.XMLSyntaxError as err:
+        msg = re.sub(r", line \d+, column \d+$", "", str(err.msg))
+        raise UrdfError(path, err.lineno or 0, f"not valid XML: {msg}") from None
     if root.tag != "robot":
         raise UrdfError(path, root.sourceline or 0, f"root element is <{root.tag}>, expected <robot>")
     links = tuple(str(e.get("name")) for e in root.findall("link"))
@@ -89,16 +91,21 @@ def read_urdf(path: Path) -> UrdfModel:
         limit = e.find("limit")
         lower = upper = None
         if limit is not None and jtype in ("revolute", "prismatic"):
-            lower, upper = float(limit.get("lower", "0")), float(limit.get("upper", "0"))
+            try:
+                lower, upper = float(limit.get("lower", "0")), float(limit.get("upper", "0"))
+            except ValueError:
+                raise UrdfError(path, limit.sourceline or 0,
+                                f"joint '{e.get('name')}': <limit lower upper> must be numbers") from None
         axis_el = e.find("axis")
         try:
-            axis = tuple(float(v) for v in (axis_el.get("xyz", "1 0 0") if axis_el is not None else "1 0 0").split())
+            xyz = axis_el.get("xyz", "1 0 0") if axis_el is not None else "1 0 0"
+            axis = tuple(float(v) for v in xyz.split())
         except ValueError:
             axis = ()
         if len(axis) != 3:
             raise UrdfError(path, e.sourceline or 0, f"joint '{e.get('name')}': <axis xyz> needs 3 numbers")
-        joint = UrdfJoint(str(e.get("name")), jtype, str(parent.get("link")), str(child.get("link")), lower, upper,
-                          (axis[0], axis[1], axis[2]))
+        joint = UrdfJoint(str(e.get("name")), jtype, str(parent.get("link")), str(child.get("link")), lower,
+                          upper, (axis[0], axis[1], axis[2]))
         for link in (joint.parent, joint.child):
             if link not in links:
                 raise UrdfError(path, e.sourceline or 0, f"joint '{joint.name}' names unknown link '{link}'")
