@@ -1,0 +1,5 @@
+"""``python -m sigcore`` = the ``sigcore`` command."""
+
+from .cli import main
+
+main()
