@@ -1,0 +1,409 @@
+"""The MuJoCo implementation of :class:`sigcore.backend.Backend`.
+
+Runtime techniques (each verified against MuJoCo 4.0 in ``tests/backend_mujoco``):
+
+* **Step cost.** :meth:`MujocoBackend.step` is ``mj_step`` plus a counter increment; only when an entity is
+  held or a wrench/torque was applied does it run a vectorised post-step (restore held ``qpos``, zero their
+  ``qvel``, clear ``xfrc_applied``/``qfrc_applied``).
+* **Fresh kinematics on read.** After ``mj_step``, ``xpos`` & co. describe the state *before* the integration.
+  The first read after a step or a state write runs ``mj_kinematics``, ``mj_comPos`` and ``mj_comVel`` once,
+  so poses, velocities and rays match ``qpos``/``qvel`` exactly. The next ``mj_step`` recomputes all of it, so
+  this does not change the trajectory.
+* **Dynamics off** (held entities): after every step their ``qpos`` slice is restored and their ``qvel`` slice
+  zeroed; ``set_pose``/``set_joint_angle`` update the held values. Static objects have no joints at all.
+* **Gravity off:** ``body_gravcomp = 1`` on the entity's bodies (a force of ``-m g`` at each body's centre of
+  mass), with ``mjModel.flg_gravcomp`` set, which MuJoCo needs to apply gravity compensation at all.
+* **Wrenches** go to ``xfrc_applied`` (force then torque, world frame, applied at the body's centre of mass);
+  joint torques to ``qfrc_applied``.
+* **Mass:** ``body_mass`` and ``body_inertia`` of the entity's bodies scaled, then ``mj_setConst`` (on a
+  scratch ``MjData``) recomputes the derived constants.
+* **Reset** restores a copy of the model taken after build (gains, masses, gravity compensation, collision
+  bits, moved static bodies, weld poses) and the initial ``qpos``/``qvel``/``ctrl``.
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import ClassVar
+
+import mujoco
+import numpy as np
+import numpy.typing as npt
+
+from sigcore.backend import Array, Backend, BackendError
+from sigcore.world.models import World
+
+from . import grasp
+from .builder import build_spec
+from .collision import CollisionBits
+from .contacts import ContactMap
+from .layout import EntityIndex, Layout, index_model
+from .plan import EntityPlan
+from .rays import RayCaster
+from .servo import ArmServo
+from .transforms import quat_to_matrix, unit
+
+_NO_INTS = np.zeros(0, dtype=np.int64)
+
+
+class MujocoBackend(Backend):
+    """MuJoCo physics (the default backend). See the module docstring for how each feature is done.
+
+    Attributes:
+        model: The compiled ``mujoco.MjModel`` (after :meth:`build`; a fresh copy after :meth:`reset`).
+        data: Its ``mujoco.MjData``. Both are for reading (e.g. rendering); writing to them bypasses the
+            backend's bookkeeping.
+    """
+
+    name: ClassVar[str] = "mujoco"
+
+    def __init__(self) -> None:
+        self._built = False
+
+    # ------------------------------------------------------------------ life cycle
+    def build(self, world: World) -> None:
+        """Compile ``world`` into a MuJoCo model (see :mod:`.builder` for the layout).
+
+        Raises:
+            BackendError: a model file is missing or MuJoCo rejects the model; the message names the entity.
+        """
+        spec, plans, welds = build_spec(world)
+        try:
+            model = spec.compile()
+        except ValueError as e:
+            raise BackendError(_compile_error(e, plans)) from None
+        self.model = model
+        self.data = mujoco.MjData(model)
+        self._layout: Layout = index_model(model, plans, welds)
+        self._entities: dict[str, EntityIndex] = self._layout.entities
+        self._contact_map = ContactMap(self._layout.geom_part, self._layout.part_entity)
+        self._rays = RayCaster()
+        self._scratch: mujoco.MjData | None = None
+        for plan in plans:
+            if plan.total_mass is not None:
+                self._scale_mass(self._entities[plan.name], plan.total_mass)
+        model.eq_data[:, 11] = 0.0  # welds keep the relative pose we give (mj_setConst must not recompute it)
+        self._servos = [j.servo for e in self._entities.values() for j in e.joints.values()]
+        self._model0 = copy.copy(model)
+        self._bits = CollisionBits()
+        self._grasps: set[tuple[str, str, str]] = set()
+        self._built = True
+        self._restart()
+
+    def _restart(self) -> None:
+        """Initial state on the current model (after build or reset)."""
+        m, d = self.model, self.data
+        mujoco.mj_resetData(m, d)
+        for servo in self._servos:
+            servo.restart(m, d)
+        self._tick = 0
+        self._synced = -1
+        self._contacts_tick = -1
+        self._contacts: frozenset[tuple[int, int]] = frozenset()
+        self._applied = False
+        self._held: set[str] = {e.name for e in self._entities.values() if e.held0}
+        self._hold = d.qpos.copy()
+        self._rebuild_held()
+        mujoco.mj_forward(m, d)
+
+    def step(self) -> None:
+        """Advance by one timestep (``mj_step``); then restore held entities and clear applied forces."""
+        mujoco.mj_step(self.model, self.data)
+        self._tick += 1
+        if self._post:
+            self._after_step()
+
+    def _after_step(self) -> None:
+        d = self.data
+        if self._held_qpos.size:
+            d.qpos[self._held_qpos] = self._held_values
+            d.qvel[self._held_dofs] = 0.0
+        if self._applied:
+            d.xfrc_applied[:] = 0.0
+            d.qfrc_applied[:] = 0.0
+            self._applied = False
+        self._post = bool(self._held_qpos.size)
+
+    def reset(self) -> None:
+        """Restore the model as built and the initial state; release grasps; restore modes and masses."""
+        self.model = copy.copy(self._model0)
+        self._bits.clear()
+        self._grasps.clear()
+        self._restart()
+
+    # ------------------------------------------------------------------ introspection
+    def parts(self, entity: str) -> list[str]:
+        """Part names of ``entity``, main part first (a robot's root link; ``main`` otherwise)."""
+        return list(self._entity(entity).parts)
+
+    def joints(self, entity: str) -> list[str]:
+        """Movable joints of a robot in URDF order; empty for objects and humans."""
+        return list(self._entity(entity).joints)
+
+    def _entity(self, name: str) -> EntityIndex:
+        if not self._built:
+            raise BackendError("the MuJoCo backend has no world yet; call build(world) first")
+        entity = self._entities.get(name)
+        if entity is None:
+            raise BackendError(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
+        return entity
+
+    def _sync(self) -> None:
+        """Bring poses, centres of mass and velocities in ``data`` up to date with ``qpos``/``qvel``."""
+        if self._synced != self._tick:
+            m, d = self.model, self.data
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            mujoco.mj_comVel(m, d)
+            self._synced = self._tick
+
+    # ------------------------------------------------------------------ state
+    def get_pose(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
+        """World position [m] and orientation (w, x, y, z) of the part's body frame (the URDF link frame)."""
+        body = self._entity(entity).body(part)
+        self._sync()
+        return self.data.xpos[body].copy(), self.data.xquat[body].copy()
+
+    def set_pose(self, entity: str, position: Array | None = None, quaternion: Array | None = None) -> None:
+        """Teleport the main part: its free joint's ``qpos``, or ``body_pos``/``body_quat`` if welded."""
+        e = self._entity(entity)
+        if e.welded:
+            if position is not None:
+                self.model.body_pos[e.root] = position
+            if quaternion is not None:
+                self.model.body_quat[e.root] = unit(quaternion)
+        else:
+            a = e.free_qpos
+            if position is not None:
+                self.data.qpos[a:a + 3] = position
+            if quaternion is not None:
+                self.data.qpos[a + 3:a + 7] = unit(quaternion)
+            self._update_hold(e)
+        self._tick += 1
+
+    def get_velocity(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
+        """Linear [m/s] and angular [rad/s] velocity of the part's frame origin, world frame."""
+        body = self._entity(entity).body(part)
+        self._sync()
+        res = np.zeros(6)
+        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_XBODY, body, res, 0)
+        return res[3:6].copy(), res[0:3].copy()
+
+    def set_velocity(self, entity: str, linear: Array | None = None, angular: Array | None = None) -> None:
+        """Set the free joint's velocity (its angular part is body-local in MuJoCo); no effect if welded."""
+        e = self._entity(entity)
+        if e.welded:
+            return
+        d, v = self.data, e.free_dof
+        if linear is not None:
+            d.qvel[v:v + 3] = linear
+        if angular is not None:
+            rot = quat_to_matrix(unit(d.qpos[e.free_qpos + 3:e.free_qpos + 7]))
+            d.qvel[v + 3:v + 6] = rot.T @ np.asarray(angular, dtype=np.float64)
+        self._tick += 1
+
+    def get_com(self, entity: str, part: str | None = None) -> Array:
+        """Centre of mass [m] of a robot link, or of a whole object or human (all its bodies)."""
+        e = self._entity(entity)
+        body = e.body(part)
+        self._sync()
+        if e.kind != "robot":
+            return self.data.subtree_com[e.root].copy()
+        return self.data.xipos[body].copy()
+
+    def apply_wrench(self, entity: str, part: str | None, force: Array, torque: Array) -> None:
+        """Add to ``xfrc_applied`` of the part's body (at its centre of mass) for the next step."""
+        body = self._entity(entity).body(part)
+        self.data.xfrc_applied[body, 0:3] += force
+        self.data.xfrc_applied[body, 3:6] += torque
+        self._applied = self._post = True
+
+    # ------------------------------------------------------------------ properties and modes
+    def get_mass(self, entity: str) -> float:
+        """Sum of the masses [kg] of the entity's bodies."""
+        return float(self.model.body_mass[self._entity(entity).bodies].sum())
+
+    def set_mass(self, entity: str, mass: float) -> None:
+        """Scale every body's mass and inertia so that they total ``mass`` [kg]; then ``mj_setConst``."""
+        self._scale_mass(self._entity(entity), mass)
+
+    def _scale_mass(self, e: EntityIndex, mass: float) -> None:
+        m = self.model
+        total = float(m.body_mass[e.bodies].sum())
+        if total <= 0.0:
+            raise BackendError(f"{e.kind} '{e.name}' has no mass to scale (its URDF has no <inertial>)")
+        factor = mass / total
+        m.body_mass[e.bodies] *= factor
+        m.body_inertia[e.bodies] *= factor
+        if self._scratch is None:
+            self._scratch = mujoco.MjData(m)
+        mujoco.mj_setConst(m, self._scratch)
+
+    def set_gravity_mode(self, entity: str, enabled: bool) -> None:
+        """Gravity off: ``body_gravcomp = 1`` on every body of the entity (and ``flg_gravcomp`` on)."""
+        e = self._entity(entity)
+        m = self.model
+        m.body_gravcomp[e.bodies] = 0.0 if enabled else 1.0
+        m.flg_gravcomp = bool(np.any(m.body_gravcomp))
+
+    def set_dynamics_mode(self, entity: str, enabled: bool) -> None:
+        """Dynamics off holds every joint of the entity (free joint included) where it is now.
+
+        Raises:
+            BackendError: enabling dynamics of a static object (it has no joints).
+        """
+        e = self._entity(entity)
+        if e.qpos.size == 0:
+            if enabled:
+                raise BackendError(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "
+                                   "cannot become dynamic; move it with set_pose")
+            return
+        if enabled:
+            self._held.discard(e.name)
+        else:
+            self._held.add(e.name)
+            self._hold[e.qpos] = self.data.qpos[e.qpos]
+            self.data.qvel[e.dofs] = 0.0
+            self._tick += 1
+        self._rebuild_held()
+
+    def _rebuild_held(self) -> None:
+        held = [self._entities[n] for n in sorted(self._held)]
+        self._held_qpos = np.concatenate([e.qpos for e in held]) if held else _NO_INTS
+        self._held_dofs = np.concatenate([e.dofs for e in held]) if held else _NO_INTS
+        self._held_values = self._hold[self._held_qpos]
+        self._post = bool(self._held_qpos.size) or self._applied
+
+    def _update_hold(self, e: EntityIndex) -> None:
+        if e.name in self._held:
+            self._hold[e.qpos] = self.data.qpos[e.qpos]
+            self.data.qvel[e.dofs] = 0.0
+            self._held_values = self._hold[self._held_qpos]
+
+    def set_collision_mode(self, entity: str, enabled: bool) -> None:
+        """Collision off zeroes ``contype``/``conaffinity`` of the entity's geoms; on restores them."""
+        e = self._entity(entity)
+        if enabled:
+            self._bits.disabled.discard(e.name)
+        else:
+            self._bits.disabled.add(e.name)
+        self._bits.apply(self.model, e)
+
+    # ------------------------------------------------------------------ joints
+    def get_joint_angle(self, entity: str, joint: str) -> float:
+        """``qpos`` of the joint [rad] or [m]."""
+        return float(self.data.qpos[self._entity(entity).joint(joint).qpos])
+
+    def set_joint_angle(self, entity: str, joint: str, angle: float) -> None:
+        """Set ``qpos`` (and zero ``qvel``) of the joint; an arm joint's servo then holds ``angle``."""
+        e = self._entity(entity)
+        j = e.joint(joint)
+        self.data.qpos[j.qpos] = angle
+        self.data.qvel[j.dof] = 0.0
+        if isinstance(j.servo, ArmServo):
+            j.servo.hold(self.model, self.data, angle)
+        self._update_hold(e)
+        self._tick += 1
+
+    def get_joint_velocity(self, entity: str, joint: str) -> float:
+        """``qvel`` of the joint [rad/s] or [m/s]."""
+        return float(self.data.qvel[self._entity(entity).joint(joint).dof])
+
+    def set_joint_target(self, entity: str, joint: str, angle: float) -> None:
+        """Position servo towards ``angle``.
+
+        Raises:
+            BackendError: the joint is a drive wheel (always a velocity servo).
+        """
+        e = self._entity(entity)
+        j = e.joint(joint)
+        if not isinstance(j.servo, ArmServo):
+            arms = [n for n, x in e.joints.items() if isinstance(x.servo, ArmServo)]
+            raise BackendError(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
+                               f"use set_joint_velocity; joints with position control: "
+                               f"{', '.join(arms) or 'none'}")
+        j.servo.hold(self.model, self.data, angle)
+
+    def set_joint_velocity(self, entity: str, joint: str, velocity: float,
+                           max_torque: float | None = None) -> None:
+        """Velocity mode at ``velocity``, limited to ``max_torque`` (default: the drive's or the gains')."""
+        j = self._entity(entity).joint(joint)
+        j.servo.drive(self.model, self.data, velocity, max_torque)
+
+    def add_joint_torque(self, entity: str, joint: str, torque: float) -> None:
+        """Add to ``qfrc_applied`` of the joint's dof for the next step."""
+        j = self._entity(entity).joint(joint)
+        self.data.qfrc_applied[j.dof] += torque
+        self._applied = self._post = True
+
+    def get_joint_position(self, entity: str, joint: str) -> Array:
+        """World position [m] of the joint anchor (``xanchor``)."""
+        j = self._entity(entity).joint(joint)
+        self._sync()
+        return self.data.xanchor[j.jnt].copy()
+
+    # ------------------------------------------------------------------ grasping
+    def attach(self, entity: str, part: str, obj: str) -> None:
+        """Switch on the weld of ``part`` and ``obj`` at their current relative pose (see :mod:`.grasp`)."""
+        robot, target = self._entity(entity), self._entity(obj)
+        key = (entity, part, obj)
+        if key in self._grasps:
+            return
+        weld = grasp.weld_id(self._layout, robot, part, target)
+        self._sync()
+        grasp.activate(self.model, self.data, weld, robot.body(part), target.root)
+        self._grasps.add(key)
+        self._bits.count(self._bits.grasping, entity, +1)
+        self._bits.count(self._bits.grasped, obj, +1)
+        self._bits.apply(self.model, robot)
+        self._bits.apply(self.model, target)
+
+    def detach(self, entity: str, part: str, obj: str) -> None:
+        """Switch the weld off (no effect if not attached)."""
+        robot, target = self._entity(entity), self._entity(obj)
+        key = (entity, part, obj)
+        if key not in self._grasps:
+            return
+        self.data.eq_active[self._layout.welds[key]] = 0
+        self._grasps.discard(key)
+        self._bits.count(self._bits.grasping, entity, -1)
+        self._bits.count(self._bits.grasped, obj, -1)
+        self._bits.apply(self.model, robot)
+        self._bits.apply(self.model, target)
+
+    # ------------------------------------------------------------------ contacts and rays
+    def contacts(self) -> frozenset[tuple[int, int]]:
+        """Part-id pairs in contact in the last step (computed once per step, from ``data.contact``)."""
+        if self._contacts_tick != self._tick:
+            self._contacts = self._contact_map.pairs(self.data)
+            self._contacts_tick = self._tick
+        return self._contacts
+
+    def part_of(self, part_id: int) -> tuple[str, str]:
+        """``(entity, part)`` of a part id; ``("ground", "main")`` for 0."""
+        table = self._layout.part_table
+        if not 0 <= part_id < len(table):
+            raise BackendError(f"no part id {part_id}; valid ids: 0..{len(table) - 1}")
+        return table[part_id]
+
+    def ray_cast(self, origin: Array, directions: npt.NDArray[np.float64], max_range: float,
+                 exclude: str | None = None) -> Array:
+        """``mj_multiRay`` against collision geoms, passing through ``exclude``'s geoms (see :mod:`.rays`)."""
+        if not self._built:
+            raise BackendError("the MuJoCo backend has no world yet; call build(world) first")
+        geoms = self._entity(exclude).geoms if exclude is not None else None
+        self._sync()
+        return self._rays.cast(self.model, self.data, origin, directions, max_range, geoms)
+
+
+def _compile_error(error: ValueError, plans: list[EntityPlan]) -> str:
+    text = " ".join(str(error).split())
+    owner = next((p for p in plans if f"'{p.name}/" in text), None)
+    where = f"{owner.kind} '{owner.name}': " if owner is not None else ""
+    hint = ""
+    if "no decoder found for mesh" in text:
+        hint = " (MuJoCo reads .stl, .obj and .msh meshes: convert the collision mesh, e.g. to .stl)"
+    if "mass and inertia of moving bodies" in text:
+        hint = (" (every link on a movable joint, and the root link of a robot that is not fixed, needs an "
+                "<inertial> with positive mass and inertia; MuJoCo takes masses only from <inertial>)")
+    return f"{where}MuJoCo cannot compile the world: {text}{hint}"

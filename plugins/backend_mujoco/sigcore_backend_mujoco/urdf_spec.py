@@ -1,0 +1,132 @@
+"""URDF files -> MuJoCo specs: mesh paths resolved, visuals dropped, Gazebo friction read.
+
+MuJoCo's URDF importer is used as is, with three preparations:
+
+* ``<visual>`` elements are removed: physics needs collision geometry only, and visual meshes are often in
+  formats MuJoCo cannot read (``.dae``).
+* Every collision ``<mesh filename>`` is made absolute: relative paths are taken relative to the URDF's
+  directory, ``package://pkg/rel`` is looked up in the URDF's directory and its parents (``pkg/rel`` or
+  ``rel`` below a directory named ``pkg``), ``file://`` is stripped. A missing mesh is a :class:`BackendError`
+  naming the entity.
+* ``<gazebo reference="link"><mu1>`` (or ``<mu>``), else PyBullet's ``<contact><lateral_friction>`` in the
+  link, gives that link's sliding friction: the conventions ROS users already use for slippery casters.
+
+The spec keeps every link as a body (``fusestatic`` off: fixed links such as a lidar or a hand are parts) and
+takes masses only from ``<inertial>`` (``inertiafromgeom`` false), as URDF means, Pinocchio and PyBullet read
+them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+from lxml import etree
+
+from sigcore.backend import BackendError
+
+_SEARCH_DEPTH = 4
+"""How many parent directories of the URDF are searched for ``package://`` meshes."""
+
+
+@dataclass(frozen=True)
+class LoadedUrdf:
+    """A URDF read into a MuJoCo spec, ready to be attached into the world spec.
+
+    Attributes:
+        spec: The child spec; its first body is the root link.
+        root: Name of the root link.
+        friction: Sliding friction per link name, from ``<gazebo>`` or ``<contact>`` tags.
+    """
+
+    spec: mujoco.MjSpec
+    root: str
+    friction: dict[str, float]
+
+
+def load_urdf(path: Path, what: str) -> LoadedUrdf:
+    """Read the URDF at ``path`` into a MuJoCo spec.
+
+    Args:
+        path: The URDF file.
+        what: The entity it belongs to, for messages, e.g. ``"robot 'robot_000'"``.
+
+    Raises:
+        BackendError: unreadable file, missing collision mesh, a root link called ``world``, or a URDF MuJoCo
+            rejects.
+    """
+    try:
+        root = etree.parse(str(path), etree.XMLParser(remove_comments=True, resolve_entities=False)).getroot()
+    except (OSError, etree.XMLSyntaxError) as e:
+        raise BackendError(f"{what}: cannot read URDF {path}: {e}") from None
+    for visual in list(root.iter("visual")):
+        visual.getparent().remove(visual)
+    for mesh in root.iter("mesh"):
+        filename = str(mesh.get("filename", ""))
+        resolved = _resolve_mesh(filename, path.parent)
+        if resolved is None:
+            link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
+            raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
+                               f"(relative paths are relative to the URDF's directory {path.parent})")
+        mesh.set("filename", str(resolved))
+    friction = _link_friction(root)
+    links = [str(e.get("name")) for e in root.findall("link")]
+    children = {str(c.get("link")) for c in root.iter("child")}
+    roots = [link for link in links if link not in children]
+    if roots == ["world"]:
+        raise BackendError(f"{what}: the root link of {path} is 'world'; remove the 'world' link and its "
+                           "joint, and set fixed=\"true\" on the <robot> to weld the robot to the world")
+    try:
+        spec = mujoco.MjSpec.from_string(etree.tostring(root, encoding="unicode"))
+    except ValueError as e:
+        raise BackendError(f"{what}: MuJoCo cannot read URDF {path}: {_first_line(e)}") from None
+    spec.compiler.fusestatic = False
+    spec.compiler.discardvisual = True
+    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    first = spec.worldbody.first_body()
+    if first is None:
+        raise BackendError(f"{what}: URDF {path} has no link MuJoCo could import")
+    return LoadedUrdf(spec, str(first.name), friction)
+
+
+def _resolve_mesh(filename: str, urdf_dir: Path) -> Path | None:
+    if filename.startswith("file://"):
+        candidates = [Path(filename[len("file://"):])]
+    elif filename.startswith("package://"):
+        package, _, rel = filename[len("package://"):].partition("/")
+        bases = [urdf_dir, *urdf_dir.parents][:_SEARCH_DEPTH + 1]
+        candidates = []
+        for base in bases:
+            if base.name == package:
+                candidates.append(base / rel)
+            candidates += [base / package / rel, base / rel]
+    else:
+        candidates = [Path(filename) if Path(filename).is_absolute() else urdf_dir / filename]
+    return next((c.resolve() for c in candidates if c.is_file()), None)
+
+
+def _link_friction(root: etree._Element) -> dict[str, float]:
+    """Sliding friction per link: ``<gazebo reference><mu1>`` (or ``<mu>``), else PyBullet's
+    ``<link><contact><lateral_friction value>``."""
+    friction: dict[str, float] = {}
+    for link in root.findall("link"):
+        lateral = link.find("contact/lateral_friction")
+        if lateral is not None:
+            _put(friction, link.get("name"), lateral.get("value"))
+    for gazebo in root.findall("gazebo"):
+        _put(friction, gazebo.get("reference"), gazebo.findtext("mu1") or gazebo.findtext("mu"))
+    return friction
+
+
+def _put(friction: dict[str, float], link: str | None, value: str | None) -> None:
+    if link is None or value is None:
+        return
+    try:
+        friction[str(link)] = max(0.0, float(value))
+    except ValueError:
+        return
+
+
+def _first_line(error: Exception) -> str:
+    return " ".join(str(error).split())
