@@ -2,9 +2,14 @@
 
 Usage: .venv/bin/python bench/sim_throughput.py [WORLD] [--steps N] [--rounds R]
 
-Rounds alternate raw and sigcore so that machine noise hits both alike; the ratio of medians is reported.
+Rounds alternate raw and sigcore so that machine noise hits both alike; ratios of medians are reported.
 sigcore's steps include everything a headless run does: contact events (a collision listener is attached), lidar
-scans at their rate, controller dispatch.
+scans at their rate, controller dispatch. Three comparisons:
+
+* sigcore (all on) against bare ``mj_step``: includes the lidar's ray casting, which bare ``mj_step`` does not do;
+* sigcore (all on) against ``mj_step`` plus the same lidar done by hand (``mj_multiRay`` from the lidar link, same
+  beams, same rate): the framework's overhead for the same work;
+* sigcore with its lidars removed against bare ``mj_step``: the framework's overhead per step.
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ import time
 from pathlib import Path
 
 import mujoco
+import numpy as np
 
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
@@ -42,26 +48,52 @@ def main() -> None:
     for _ in range(200):
         mujoco.mj_step(model, raw)
 
-    raw_rates, core_rates = [], []
-    for _ in range(args.rounds):
+    lidars = [(lidar, model.body(f"{lidar.robot}/{lidar.model.link}").id) for lidar in sim.lidars]
+    mask = np.zeros(6, dtype=np.uint8)
+    mask[0] = 1
+
+    def raw_lidar_steps(n: int, step0: int) -> None:
+        for i in range(step0 + 1, step0 + n + 1):
+            mujoco.mj_step(model, raw)
+            for lidar, body in lidars:
+                if i % lidar.period_steps == 0:
+                    nray = lidar.model.beams
+                    dirs = (lidar._local @ raw.xmat[body].reshape(3, 3).T).reshape(-1)
+                    geomid = np.zeros(nray, dtype=np.int32)
+                    dist = np.zeros(nray)
+                    mujoco.mj_multiRay(model, raw, raw.xpos[body], dirs, mask, 1, body, geomid, dist, None, nray,
+                                       lidar.model.range[1])
+
+    rates: dict[str, list[float]] = {"raw": [], "raw+lidar": [], "sigcore": [], "sigcore-nolidar": []}
+    saved_lidars = sim.lidars
+    for r in range(args.rounds):
         t0 = time.perf_counter()
         for _ in range(args.steps):
             mujoco.mj_step(model, raw)
-        raw_rates.append(args.steps / (time.perf_counter() - t0))
+        rates["raw"].append(args.steps / (time.perf_counter() - t0))
+        t0 = time.perf_counter()
+        raw_lidar_steps(args.steps, r * args.steps)
+        rates["raw+lidar"].append(args.steps / (time.perf_counter() - t0))
         t0 = time.perf_counter()
         sim.step(args.steps)
-        core_rates.append(args.steps / (time.perf_counter() - t0))
+        rates["sigcore"].append(args.steps / (time.perf_counter() - t0))
+        sim.lidars = []
+        t0 = time.perf_counter()
+        sim.step(args.steps)
+        rates["sigcore-nolidar"].append(args.steps / (time.perf_counter() - t0))
+        sim.lidars = saved_lidars
 
     dt = world.timestep
-    raw_med, core_med = statistics.median(raw_rates), statistics.median(core_rates)
+    med = {k: statistics.median(v) for k, v in rates.items()}
     print(f"world: {args.world}  timestep: {dt} s  bodies: {model.nbody}  geoms: {model.ngeom}  "
-          f"lidars: {len(sim.lidars)}")
-    print(f"rounds: {args.rounds} x {args.steps} steps, alternating")
-    print(f"raw mj_step:   {raw_med:10.0f} steps/s   real-time factor {raw_med * dt:7.1f}")
-    print(f"sigcore step:  {core_med:10.0f} steps/s   real-time factor {core_med * dt:7.1f}")
-    print(f"ratio sigcore/raw: {core_med / raw_med:.3f}  (target >= 0.9)")
-    print(f"per step: raw {1e6 / raw_med:.1f} us, sigcore {1e6 / core_med:.1f} us, "
-          f"overhead {1e6 / core_med - 1e6 / raw_med:.1f} us")
+          f"lidars: {', '.join(f'{x.model.beams} beams at {x.model.rate} Hz' for x in sim.lidars) or 'none'}")
+    print(f"rounds: {args.rounds} x {args.steps} steps each, alternating")
+    for k, label in (("raw", "raw mj_step"), ("raw+lidar", "raw mj_step + mj_multiRay lidar"),
+                     ("sigcore", "sigcore step (all on)"), ("sigcore-nolidar", "sigcore step, no lidar")):
+        print(f"  {label:34s} {med[k]:9.0f} steps/s  {1e6 / med[k]:6.1f} us/step  real-time factor {med[k] * dt:6.1f}")
+    print(f"ratio sigcore / (raw + same lidar):     {med['sigcore'] / med['raw+lidar']:.3f}  (target >= 0.9)")
+    print(f"ratio sigcore without lidar / raw:      {med['sigcore-nolidar'] / med['raw']:.3f}  (target >= 0.9)")
+    print(f"ratio sigcore (all on) / bare mj_step:  {med['sigcore'] / med['raw']:.3f}  (includes the lidar's rays)")
 
 
 if __name__ == "__main__":

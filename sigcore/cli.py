@@ -17,7 +17,7 @@ from .world import WorldError, parse_world
 
 app = typer.Typer(help="sigcore: drive a physics simulation through ROS 2 topics and services.",
                   no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False)
-out = Console(highlight=False)
+out = Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False)
 
 WorldPath = Annotated[Path, typer.Argument(exists=True, dir_okay=False, readable=True, help="world XML file")]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from enum import Enum
+from enum import StrEnum
 
 
 class ApiError(ValueError):
@@ -12,7 +12,7 @@ class ApiError(ValueError):
     """
 
 
-class GraspRefusal(str, Enum):
+class GraspRefusal(StrEnum):
     """Why SIGVerse (and sigcore) refuse a grasp."""
 
     UNKNOWN_PART = "unknown_part"
