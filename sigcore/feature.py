@@ -6,6 +6,7 @@ from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
 if TYPE_CHECKING:
+    from .api.table import ApiEntry
     from .sim.simulation import Simulation
 
 
@@ -13,6 +14,12 @@ class Feature(ABC):
     """A feature of one simulation, configured by the attributes of its ``<plugin>`` element."""
 
     name: ClassVar[str]
+
+    @classmethod
+    def api_entries(cls) -> list[ApiEntry]:
+        """Endpoints this feature adds to every agent of the listed kinds (e.g. ``_ik`` for robots). Their types
+        must be in an interface package: bundled features' types are generated into ``sigcore_msgs``."""
+        return []
 
     @abstractmethod
     def __init__(self, sim: Simulation, config: dict[str, str]) -> None:

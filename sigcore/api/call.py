@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel, ValidationError
 
 from ..agent.exceptions import ApiError
+from .deferred import Deferred
 from .table import ApiEntry
 
 if TYPE_CHECKING:
@@ -26,12 +27,14 @@ def _validation_message(entry: ApiEntry, e: ValidationError) -> str:
     return f"invalid {entry.ros_type} request ({'; '.join(parts)}); fields: {fields}"
 
 
-def call(sim: Simulation, entry: ApiEntry, agent: str, request: BaseModel | dict[str, Any] | None) -> dict[str, Any]:
+def call(sim: Simulation, entry: ApiEntry, agent: str,
+         request: BaseModel | dict[str, Any] | None) -> dict[str, Any] | Deferred:
     """Run ``entry`` for ``agent``. Never raises for bad input.
 
     Returns:
         For services, every response field including ``success`` and ``message`` (what was wrong, if anything).
-        For subscribed topics, ``{"success": ..., "message": ...}``.
+        For subscribed topics, ``{"success": ..., "message": ...}``. A :class:`Deferred` when the handler's answer
+        needs the simulation to run on: poll it with :func:`finish` after each step.
     """
     if entry.handler is None or entry.request is None:
         return {"success": False, "message": f"{entry.suffix} is published by the simulation, not handled"}
@@ -40,6 +43,8 @@ def call(sim: Simulation, entry: ApiEntry, agent: str, request: BaseModel | dict
             request = request.model_dump()
         req = request if isinstance(request, entry.request) else entry.request.model_validate(request or {})
         fields = entry.handler(sim, agent, req) or {}
+        if isinstance(fields, Deferred):
+            return fields
         out: dict[str, Any] = {**fields, "success": True, "message": ""}
     except ValidationError as e:
         out = {"success": False, "message": _validation_message(entry, e)}
@@ -48,9 +53,42 @@ def call(sim: Simulation, entry: ApiEntry, agent: str, request: BaseModel | dict
     except Exception as e:  # a bug must not stop the simulation either; report it loudly
         log.exception("handler of %s%s raised", agent, entry.suffix)
         out = {"success": False, "message": f"internal error in {entry.suffix}: {type(e).__name__}: {e}"}
+    return _complete(entry, agent, out)
+
+
+def _complete(entry: ApiEntry, agent: str, out: dict[str, Any]) -> dict[str, Any]:
     if not out["success"]:
         log.warning("%s%s refused: %s", agent, entry.suffix, out["message"])
     if entry.response is not None:
         defaults = entry.response().model_dump()
         return {**defaults, **out}
     return out
+
+
+def finish(sim: Simulation, entry: ApiEntry, agent: str, deferred: Deferred) -> dict[str, Any] | None:
+    """Poll a deferred response after a step: the full response once done (or failed), else ``None``."""
+    try:
+        fields = deferred.poll(sim.time)
+        if fields is None:
+            return None
+        out: dict[str, Any] = {**fields, "success": True, "message": ""}
+    except (ApiError, TimeoutError) as e:
+        out = {"success": False, "message": str(e)}
+    except Exception as e:
+        log.exception("deferred handler of %s%s raised", agent, entry.suffix)
+        out = {"success": False, "message": f"internal error in {entry.suffix}: {type(e).__name__}: {e}"}
+    return _complete(entry, agent, out)
+
+
+def call_and_wait(sim: Simulation, entry: ApiEntry, agent: str, request: BaseModel | dict[str, Any] | None,
+                  max_steps: int = 1_000_000) -> dict[str, Any]:
+    """:func:`call`, stepping the simulation until a deferred answer is done (for Python use and tests)."""
+    result = call(sim, entry, agent, request)
+    for _ in range(max_steps):
+        if not isinstance(result, Deferred):
+            return result
+        sim.step()
+        done = finish(sim, entry, agent, result)
+        if done is not None:
+            return done
+    return {"success": False, "message": f"not done after {max_steps} steps"}

@@ -6,21 +6,13 @@ import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+__all__ = ["RunControl", "RunReport", "run"]
+
 from .. import plugins
 from ..transport import Transport
+from .control import RunControl
 from .dispatch import ControllerFailure
 from .simulation import Simulation
-
-
-@dataclass
-class RunControl:
-    """Requests from outside the loop (a transport, a signal handler): pause, resume, step N, stop, reset."""
-
-    paused: bool = False
-    lockstep: bool = False
-    pending_steps: int = 0
-    stop: bool = False
-    reset: bool = False
 
 
 @dataclass(frozen=True)
@@ -62,12 +54,12 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         duration: Simulated seconds to run [s]; None with ``steps`` None runs until stopped.
         steps: Number of steps to run (wins over ``duration``).
         realtime_factor: None for as fast as possible; 1.0 for real time; 2.0 for twice real time.
-        control: Pause / lockstep / step-N / stop requests, changed by a transport or a signal handler.
+        control: Pause / lockstep / step-N / stop requests (default: ``sim.control``, which transports change).
         transport: Serviced between steps (never during one).
         progress: Called about every ``progress_every`` wall seconds.
         progress_every: Wall seconds between progress calls [s].
     """
-    control = control or RunControl()
+    control = control or sim.control
     target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     start_step, start_time = sim.step_count, sim.time
     wall0 = _time.perf_counter()
