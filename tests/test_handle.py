@@ -291,3 +291,38 @@ def test_angle_to_axis_is_an_angle(sim: Simulation) -> None:
     assert sim.agent("bot").angle_to_axis("x", (1, 1, 0)) == pytest.approx(math.pi / 4)
     with pytest.raises(ApiError, match="x, y, z"):
         sim.agent("bot").angle_to_axis("w", (1, 0, 0))
+
+
+def test_add_joint_torque_accelerates_the_joint(sim: Simulation) -> None:
+    """A joint torque applied for one step turns the joint in its direction (against the holding servo)."""
+    bot = sim.robot("bot")
+    sim.step(50)
+    bot.add_joint_torque("shoulder_joint", 20.0)
+    sim.step(1)
+    assert bot.joint_velocity("shoulder_joint") > 0.01
+    with pytest.raises(ApiError, match="torque"):
+        bot.add_joint_torque("shoulder_joint", float("nan"))
+
+
+def test_add_force_to_part_pushes_that_part(sim: Simulation) -> None:
+    """A force on one robot part (the hand) moves the robot base less than the same force on the base would turn it:
+    the hand force makes the arm joint move."""
+    bot = sim.robot("bot")
+    sim.step(50)
+    a0 = bot.joint_angle("shoulder_joint")
+    bot.add_force_to_part("forearm_link", (0.0, 200.0, 0.0))
+    sim.step(5)
+    assert bot.joint_angle("shoulder_joint") > a0 + 1e-4
+    with pytest.raises(ApiError, match="parts: main"):
+        bot.add_force_to_part("tail", (0, 1, 0))
+
+
+def test_set_owner_recorded_and_validated(sim: Simulation) -> None:
+    """_setOwner records the owner of a part; an unknown owner is refused."""
+    from sigcore.api import api_table, call
+
+    entry = next(e for e in api_table() if e.suffix == "_setOwner")
+    assert call(sim, entry, "moderator", {"name": "cube", "part": "main", "owner": "bot"})["success"]
+    assert sim.owners[("cube", "main")] == "bot"
+    r = call(sim, entry, "moderator", {"name": "cube", "part": "main", "owner": "nobody"})
+    assert not r["success"] and "no agent 'nobody'" in r["message"]
