@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from mujoco_worlds import G, robot
-from sigcore_backend_mujoco.transforms import quat_from_rpy
+
+from sigcore.geometry import quat_from_rpy
 
 STICK_URDF = """<robot name="stick">
   <link name="stick_link">

@@ -31,6 +31,8 @@ import numpy as np
 import numpy.typing as npt
 
 from sigcore.backend import Array, Backend, BackendError
+from sigcore.geometry import normalized as unit
+from sigcore.geometry import quat_to_matrix
 from sigcore.world.models import World
 
 from . import grasp
@@ -41,7 +43,6 @@ from .layout import EntityIndex, Layout, index_model
 from .plan import EntityPlan
 from .rays import RayCaster
 from .servo import ArmServo
-from .transforms import quat_to_matrix, unit
 
 _NO_INTS = np.zeros(0, dtype=np.int64)
 

@@ -25,6 +25,7 @@ import mujoco
 import numpy as np
 
 from sigcore.backend import BackendError
+from sigcore.geometry import quat_from_rpy
 from sigcore.world.models import Human, Object, Pose, Robot, World
 from sigcore.world.urdf import UrdfError, read_urdf
 
@@ -39,7 +40,6 @@ from .plan import (
     prefix,
 )
 from .servo import MOTOR_ARMATURE, motor_name
-from .transforms import quat_from_rpy
 from .urdf_spec import load_urdf
 
 _GEOM = mujoco.mjtGeom

@@ -21,9 +21,9 @@ from __future__ import annotations
 import mujoco
 
 from sigcore.backend import BackendError
+from sigcore.geometry import quat_conj, quat_mul
 
 from .layout import EntityIndex, Layout
-from .transforms import quat_conj, quat_mul
 
 
 def weld_id(layout: Layout, robot: EntityIndex, part: str, obj: EntityIndex) -> int:
