@@ -40,13 +40,22 @@ def _check_backend(value: str) -> str:
     return value
 
 
-def _load(world_file: Path, backend: str) -> object:
+def _load(world_file: Path, backend: str, controllers: list[str] | None = None) -> object:
+    from .agent.exceptions import ApiError
     from .sim import Simulation
 
+    overrides: dict[str, str] = {}
+    for item in controllers or []:
+        agent, sep, spec = item.partition("=")
+        if not sep or not agent or not spec:
+            raise _fail([f"--controller wants AGENT=CONTROLLER (e.g. robot_000=cleanup.robot), got {item!r}"])
+        overrides[agent] = spec
     try:
         world = parse_world(world_file)
         plugins.notify("sigcore_world_loaded", world=world)
-        return Simulation(world, backend)
+        return Simulation(world, backend, overrides)
+    except ApiError as e:
+        raise _fail([f"{world_file}: --controller: {e}"]) from None
     except WorldError as e:
         raise _fail([str(i) for i in e.issues]) from None
     except plugins.PluginError as e:
@@ -66,10 +75,11 @@ def run(
     paused: Annotated[bool, typer.Option("--paused", help="start paused (resume through a transport)")] = False,
     transport: Annotated[str | None, typer.Option(help="transport plugin, e.g. ros2")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no progress display")] = False,
+    controller: Annotated[list[str] | None, typer.Option(
+        help="attach a controller: AGENT=NAME (registered name or package.module:Class); repeatable")] = None,
 ) -> None:
     """Run a world headless and print what ran."""
     from .sim import run as run_sim
-    from .sim.runner import RunControl
 
     if realtime and factor is not None:
         raise _fail(["--realtime and --factor exclude each other: --realtime is --factor 1"])
@@ -84,7 +94,7 @@ def run(
             transport_obj = plugins.get_transport(transport)()
         except plugins.PluginError as e:
             raise _fail([str(e)]) from None
-    sim = _load(world_file, backend)
+    sim = _load(world_file, backend, controller)
     from .sim import Simulation
 
     assert isinstance(sim, Simulation)
@@ -105,11 +115,12 @@ def run(
             err.print(line)
 
     rtf = 1.0 if realtime else factor
+    sim.control.paused = paused  # the simulation's own control: transports pause, step and stop through it
     out.print(f"sigcore {__version__}: world '{sim.world.name}' ({world_file}) on backend '{backend}', "
               f"timestep {sim.dt} s")
     try:
         report = run_sim(sim, duration=duration, steps=steps, realtime_factor=rtf,
-                         control=RunControl(paused=paused), transport=transport_obj, progress=progress,
+                         control=sim.control, transport=transport_obj, progress=progress,
                          progress_every=2.0 if not tty else 0.25)
     except KeyboardInterrupt:
         raise _fail(["interrupted"], 130) from None
@@ -127,6 +138,11 @@ def run(
     for name, summary in report.summary.items():
         if summary:
             out.print(f"  {name}: {summary}")
+    for feature in sim.features.values():
+        for line in feature.report():
+            out.print(line, markup=False, highlight=False)
+    if any(feature.outcome() is False for feature in sim.features.values()):
+        raise typer.Exit(1)  # the world's task failed (e.g. the referee's result is not 'succeeded')
 
 
 @app.command()

@@ -29,3 +29,15 @@ class Feature(ABC):
     def summary(self) -> dict[str, object]:
         """Figures to print at the end of a run (e.g. a score)."""
         return {}
+
+    def report(self) -> list[str]:
+        """Lines printed as they are after the summaries at the end of a run (e.g. a score table); none by default."""
+        return []
+
+    def outcome(self) -> bool | None:
+        """Whether the world's task succeeded, for the exit code of ``sigcore run`` (1 if any feature says False);
+        ``None``: no verdict (the default, or the task has not ended)."""
+        return None
+
+    def reset(self) -> None:
+        """Called by :meth:`Simulation.reset` after the backend's state was restored; forget per-run state."""

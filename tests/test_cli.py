@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -86,3 +87,18 @@ def test_interface_files_are_current() -> None:
     pkg = ROOT / "interfaces" / "sigcore_msgs"
     for rel, text in interface_files().items():
         assert (pkg / rel).read_text() == text, f"{rel} is stale: run sigcore interfaces"
+
+
+def test_controller_option_attaches_and_validates() -> None:
+    """--controller AGENT=NAME attaches a controller; a bad form or an unknown agent is refused with exit 2."""
+    r = subprocess.run([sys.executable, "-m", "sigcore", "run", str(WORLD), "--steps", "50", "--quiet",
+                        "--controller", "moderator=trackers:Raising"], capture_output=True, text=True, cwd=ROOT,
+                       timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT / "tests")})
+    assert r.returncode == 0, r.stderr
+    assert "controller of 'moderator' disabled (on_action" in r.stdout and "boom" in r.stdout
+    r = sigcore("run", str(WORLD), "--steps", "5", "--controller", "moderator")
+    assert r.returncode == 2 and "AGENT=CONTROLLER" in r.stderr
+    r = sigcore("run", str(WORLD), "--steps", "5", "--controller", "nobody=cleanup.robot")
+    assert r.returncode == 2 and "no agent 'nobody'" in r.stderr
+    r = sigcore("run", str(WORLD), "--steps", "5", "--controller", "moderator=no.such:Thing")
+    assert r.returncode == 2 and ":" in r.stderr.splitlines()[0] and "cannot import module 'no.such'" in r.stderr

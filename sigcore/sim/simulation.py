@@ -36,13 +36,16 @@ class Simulation:
     Args:
         world: The validated world.
         backend: A registered backend name (default ``"mujoco"``) or a backend instance.
+        controllers: Controllers to attach instead of (or in addition to) the world file's, by agent name:
+            a registered name or ``package.module:Class`` (e.g. ``{"robot_000": "cleanup.robot"}``).
 
     Raises:
         WorldError: a controller or feature named in the world cannot be created (located in the file).
         sigcore.plugins.PluginError: the backend is not registered.
     """
 
-    def __init__(self, world: World, backend: str | Backend = "mujoco") -> None:
+    def __init__(self, world: World, backend: str | Backend = "mujoco",
+                 controllers: dict[str, str] | None = None) -> None:
         self.world = world
         self.dt = world.timestep
         self.backend: Backend = plugins.get_backend(backend)() if isinstance(backend, str) else backend
@@ -79,7 +82,7 @@ class Simulation:
             for r in world.agents if isinstance(r, Robot) for i, lidar in enumerate(r.lidars)
         ]
         self.odometry: dict[str, WheelOdometry] = {}
-        self._attach_controllers()
+        self._attach_controllers(controllers or {})
         self.features: dict[str, Feature] = {}
         self._create_features()
         self._started = False
@@ -96,21 +99,26 @@ class Simulation:
         ln, col = self.world.location(agent, attribute)
         return WorldIssue(self.world.source, ln, col, self._models[agent].kind, attribute, message)
 
-    def _attach_controllers(self) -> None:
+    def _attach_controllers(self, overrides: dict[str, str]) -> None:
+        unknown = sorted(set(overrides) - set(self.agents))
+        if unknown:
+            raise ApiError(f"no agent {', '.join(repr(u) for u in unknown)} to attach a controller to; agents: "
+                           f"{', '.join(self.agents)}")
         registered = plugins.controllers()
         issues = []
         for agent in self.world.agents:
-            if agent.controller is None:
+            spec = overrides.get(agent.name, agent.controller)
+            if spec is None:
                 continue
             try:
-                cls = resolve_controller(agent.controller, registered)
+                cls = resolve_controller(spec, registered)
                 controller = cls()
             except ControllerError as e:
                 issues.append(self._issue(agent.name, "controller", str(e)))
                 continue
             except Exception as e:
                 issues.append(self._issue(agent.name, "controller",
-                                          f"creating controller '{agent.controller}' raised {type(e).__name__}: {e}"))
+                                          f"creating controller '{spec}' raised {type(e).__name__}: {e}"))
                 continue
             self.dispatch.add(self.agents[agent.name], controller)
         if issues:
@@ -329,6 +337,8 @@ class Simulation:
         self._triples = frozenset()
         for odo in self.odometry.values():
             odo.reset()
+        for feature in self.features.values():
+            feature.reset()
 
     def poses(self) -> dict[str, tuple[Array, Array]]:
         """Main-part pose of every entity (used to compare runs)."""

@@ -1,0 +1,101 @@
+"""The ``<plugin name="referee" .../>`` attributes, as a strict pydantic model."""
+
+from __future__ import annotations
+
+import difflib
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
+
+
+def _words(value: object) -> object:
+    return tuple(value.split()) if isinstance(value, str) else value
+
+
+def _corners(value: object) -> object:
+    if not isinstance(value, str):
+        return value
+    try:
+        numbers = tuple(float(v) for v in value.split())
+    except ValueError:
+        raise ValueError(f"{value!r} is not numbers separated by spaces") from None
+    if len(numbers) != 6:
+        raise ValueError(f"expected 6 numbers 'x0 y0 z0 x1 y1 z1', got {len(numbers)}")
+    if not all(numbers[i] < numbers[i + 3] for i in range(3)):
+        raise ValueError("the corners must satisfy x0 < x1, y0 < y1, z0 < z1")
+    return numbers
+
+
+Words = Annotated[tuple[str, ...], BeforeValidator(_words)]
+Corners = Annotated[tuple[float, float, float, float, float, float] | None, BeforeValidator(_corners)]
+
+_VALID = {
+    "rules": "'cleanup' or 'none'",
+    "time_limit": "seconds >= 0 (0: no limit), e.g. 600",
+    "box_inner": "'x0 y0 z0 x1 y1 z1' [m] with x0 < x1, y0 < y1, z0 < z1",
+    "stop_on_finish": "'true' or 'false'",
+    "floor": "'true' or 'false'",
+    **{k: "an integer number of points, e.g. -100" for k in ("correct_box", "wrong_box", "grasp", "collision")},
+}
+
+
+class RefereeConfig(BaseModel):
+    """Attributes of ``<plugin name="referee">``; every one is optional. Points are integers."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, str_strip_whitespace=True, allow_inf_nan=False)
+
+    rules: Literal["cleanup", "none"] = Field(
+        default="none", description="built-in rules: 'cleanup' detects the clean-up task's events itself; "
+                                    "'none' only scores the messages of the viewer service")
+    service: str = Field(default="referee", min_length=1, pattern=r"^\S+$",
+                         description="name of the viewer service (_connect_to_service, _send_msg_to_srv)")
+    correct_box: int = Field(default=1000, description="trash item at rest in a box that accepts it [points]")
+    wrong_box: int = Field(default=-600, description="trash item at rest in another trash box [points]")
+    grasp: int = Field(default=50, description="first grasp of each trash item [points]")
+    collision: int = Field(default=-100, description="one contact episode of a robot with furniture, a wall "
+                                                     "or the floor [points]")
+    time_limit: float = Field(default=600.0, ge=0, description="the task ends this long after the start in "
+                                                               "[s]; 0: no limit")
+    debounce: float = Field(default=0.5, gt=0, le=60, description="a contact episode ends after no contact "
+                                                                  "for this long in [s]")
+    rest_speed: float = Field(default=0.05, gt=0, le=10, description="an item below this speed is at rest in "
+                                                                     "[m/s]")
+    rest_time: float = Field(default=0.5, ge=0, le=60, description="an item must stay at rest this long before "
+                                                                   "it is judged in [s]")
+    rate: float = Field(default=10.0, gt=0, le=1000, description="how often the rules look at the world in "
+                                                                 "[Hz] (collisions are seen every step)")
+    trash_tag: str = Field(default="trash", min_length=1, description="tag of the trash items")
+    box_tag: str = Field(default="trashbox", min_length=1, description="tag of the trash boxes")
+    collision_tags: Words = Field(default=("furniture", "wall"), description="a robot touching an entity with "
+                                                                             "one of these tags is penalised")
+    floor: bool = Field(default=True, description="penalise robot parts other than floor_parts touching the "
+                                                  "ground")
+    floor_parts: Words | None = Field(default=None, description="robot parts allowed on the ground; default: "
+                                                                "the drive's wheel links and links named "
+                                                                "*caster*")
+    robots: Words | None = Field(default=None, description="robots the rules watch; default: every robot")
+    box_inner: Corners = Field(default=None, description="inner volume of every trash box, two corners in the "
+                                                         "box's frame in [m]; default: read from its URDF")
+    stop_on_finish: bool = Field(default=False, description="stop the run when the task ends")
+
+    @classmethod
+    def from_attributes(cls, config: dict[str, str]) -> RefereeConfig:
+        """Validate the plugin element's attributes.
+
+        Raises:
+            ValueError: naming the attribute, what was wrong and what is valid.
+        """
+        fields = list(cls.model_fields)
+        unknown = [k for k in config if k not in fields]
+        if unknown:
+            close = difflib.get_close_matches(unknown[0], fields, n=1)
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            raise ValueError(f"unknown attribute '{unknown[0]}'{hint}; valid: {', '.join(fields)}")
+        try:
+            return cls.model_validate(config)
+        except ValidationError as e:
+            err = e.errors()[0]
+            where = str(err["loc"][0])
+            valid = _VALID.get(where, cls.model_fields[where].description or "")
+            message = str(err["msg"]).removeprefix("Value error, ")
+            raise ValueError(f"attribute '{where}'={config.get(where, '')!r}: {message}; valid: {valid}") from None
