@@ -82,8 +82,10 @@ def test_topics_change_the_state(sim: Simulation) -> None:
     assert call(sim, t["_setMass"], "ball", {"name": "", "mass": 2.0})["success"]
     assert sim.agent("ball").mass() == pytest.approx(2.0)
     assert call(sim, t["_setWheelVelocity"], "bot", {"left_wheel": 4.0, "right_wheel": 4.0})["success"]
+    assert call(sim, t["_setJointTarget"], "bot", {"name": "", "joint_name": "elbow_joint", "angle": 0.4})["success"]
     sim.step(500)
     assert sim.agent("bot").position()[0] > 0.2
+    assert sim.robot("bot").joint_angle("elbow_joint") == pytest.approx(0.4, abs=0.02)
 
 
 def test_grasp_service_reports_refusal_reason(sim: Simulation) -> None:

@@ -68,7 +68,7 @@ def test_api_lists_every_agent() -> None:
     """`sigcore api WORLD` lists each agent with its endpoint count and the total."""
     r = sigcore("api", str(WORLD))
     assert r.returncode == 0
-    assert "bot (robot): 48 endpoints" in r.stdout and "7 agents, 299 endpoints" in r.stdout
+    assert "bot (robot): 49 endpoints" in r.stdout and "7 agents, 306 endpoints" in r.stdout
 
 
 def test_plugins_lists_mujoco() -> None:

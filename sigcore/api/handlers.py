@@ -47,6 +47,10 @@ def set_joint_angle(sim: Simulation, agent: str, m: Any) -> None:
     _robot(sim, agent, m.name).set_joint_angle(m.joint_name, m.angle)
 
 
+def set_joint_target(sim: Simulation, agent: str, m: Any) -> None:
+    _robot(sim, agent, m.name).set_joint_target(m.joint_name, m.angle)
+
+
 def set_joint_quaternion(sim: Simulation, agent: str, m: Any) -> None:
     _robot(sim, agent, m.name).set_joint_quaternion(m.joint_name, (m.qw, m.qx, m.qy, m.qz), m.offset)
 

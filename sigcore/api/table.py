@@ -86,6 +86,8 @@ def _entries() -> list[ApiEntry]:
             "joint speed [rad/s] of this robot, torque limit max [N m]"),
         sub("_setJointAngle", "SetJointAngle", t.SetJointAngle, ALL, h.set_joint_angle,
             "set a joint angle [rad] instantly"),
+        sub("_setJointTarget", "SetJointAngle", t.SetJointAngle, ALL, h.set_joint_target,
+            "move a joint to an angle [rad] through its servo, over time", origin="sigcore"),
         sub("_setJointQuaternion", "SetJointQuaternion", t.SetJointQuaternion, ALL, h.set_joint_quaternion,
             "set a revolute joint from a quaternion"),
         sub("_addJointTorque", "AddJointTorque", t.AddJointTorque, ALL, h.add_joint_torque,
