@@ -41,3 +41,4 @@ class Feature(ABC):
 
     def reset(self) -> None:
         """Called by :meth:`Simulation.reset` after the backend's state was restored; forget per-run state."""
+        return None

@@ -63,6 +63,7 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
     target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     start_step, start_time = sim.step_count, sim.time
     wall0 = _time.perf_counter()
+    pace_time, pace_wall = start_time, wall0  # real-time pacing reference, moved on while paused
     next_progress = wall0 + progress_every
     sim.start()
     if transport is not None:
@@ -79,12 +80,13 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
                 if control.pending_steps <= 0:
                     if transport is None:
                         break  # nothing can ever resume us
+                    pace_time, pace_wall = sim.time, _time.perf_counter()  # no catching up after a pause
                     continue
                 control.pending_steps -= 1
             sim.step()
             now = _time.perf_counter()
             if realtime_factor is not None:
-                ahead = (sim.time - start_time) / realtime_factor - (now - wall0)
+                ahead = (sim.time - pace_time) / realtime_factor - (now - pace_wall)
                 if ahead > 0.001:
                     _time.sleep(ahead)
             if progress is not None and now >= next_progress:

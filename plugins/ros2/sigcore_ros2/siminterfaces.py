@@ -1,0 +1,421 @@
+"""The standard ``simulation_interfaces`` (Jazzy 1.5) services and the ``simulate_steps`` action.
+
+Supported (and listed by get_simulator_features): entity tags in filters, entity state getting and setting,
+reset (state scope: time never goes back), simulation state getting and setting (stopped, playing, paused,
+quitting), single and multiple steps, the SimulateSteps action. Not supported: spawning and deleting (the
+services exist and answer RESULT_FEATURE_UNSUPPORTED), bounds filters, categories, named poses, worlds.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import re
+import threading
+from typing import TYPE_CHECKING, Any
+
+from simulation_interfaces.msg import EntityState, Result, SimulationState, SimulatorFeatures
+from simulation_interfaces.srv import (
+    DeleteEntity,
+    GetEntities,
+    GetEntitiesStates,
+    GetEntityState,
+    GetSimulationState,
+    GetSimulatorFeatures,
+    ResetSimulation,
+    SetEntityState,
+    SetSimulationState,
+    SpawnEntity,
+    StepSimulation,
+)
+
+from sigcore.agent.exceptions import ApiError
+
+from .convert import finite, stamp
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+
+    from sigcore.sim.simulation import Simulation
+
+    from .receiver import Receiver
+
+log = logging.getLogger("sigcore.ros2")
+
+F = SimulatorFeatures
+SUPPORTED = [F.ENTITY_TAGS, F.ENTITY_STATE_GETTING, F.ENTITY_STATE_SETTING, F.SIMULATION_RESET,
+             F.SIMULATION_RESET_STATE, F.SIMULATION_STATE_GETTING, F.SIMULATION_STATE_SETTING,
+             F.SIMULATION_STATE_PAUSE, F.STEP_SIMULATION_SINGLE, F.STEP_SIMULATION_MULTIPLE,
+             F.STEP_SIMULATION_ACTION]
+"""What get_simulator_features announces: only what is really implemented."""
+
+SERVICES = {
+    "get_simulator_features": GetSimulatorFeatures, "get_entities": GetEntities,
+    "get_entity_state": GetEntityState, "set_entity_state": SetEntityState,
+    "get_entities_states": GetEntitiesStates, "spawn_entity": SpawnEntity, "delete_entity": DeleteEntity,
+    "get_simulation_state": GetSimulationState, "set_simulation_state": SetSimulationState,
+    "reset_simulation": ResetSimulation, "step_simulation": StepSimulation,
+}
+
+
+def _result(code: int, message: str = "") -> Result:
+    return Result(result=code, error_message=message)
+
+
+class StepWaiter:
+    """Steps requested through step_simulation or simulate_steps, answered when reached."""
+
+    def __init__(self, target: int, done: Any) -> None:
+        self.target = target
+        self.done = done  # called with the Result when the target step is reached or the request fails
+
+
+class SimInterfaces:
+    """The simulation_interfaces services (run on the simulation thread through the receiver).
+
+    Args:
+        sim: The simulation.
+        node: The node that owns the services.
+        receiver: Where the services are registered.
+        prefix: Namespace of the services (``""`` for the root).
+        on_reset: Called after a reset (to republish state).
+    """
+
+    def __init__(self, sim: Simulation, node: Node, receiver: Receiver, prefix: str, on_reset: Any) -> None:
+        self.sim = sim
+        self.stopped = False
+        self.waiters: list[StepWaiter] = []
+        self.on_reset = on_reset
+        self.dt_ns = round(sim.dt * 1e9)
+        self.names: dict[str, str] = {}
+        self._warned: set[str] = set()
+        self._models = {a.name: a for a in sim.world.agents}
+        for name, srv_type in SERVICES.items():
+            full = f"{prefix}/{name}"
+            srv = node.create_service(srv_type, full, lambda *_: None)
+            receiver.add_service(srv, self._bind(srv, getattr(self, f"_{name}")))
+            self.names[full] = f"simulation_interfaces/srv/{srv_type.__name__}"
+
+    def _bind(self, srv: Any, method: Any) -> Any:
+        def handle(request: Any, header: Any) -> None:
+            response = srv.srv_type.Response()
+            try:
+                answered = method(request, response, lambda r: srv.send_response(r, header))
+            except Exception as e:  # a bug must not stop the simulation
+                log.exception("%s failed", srv.srv_name)
+                response.result = _result(Result.RESULT_OPERATION_FAILED, f"internal error: {e}")
+                answered = False
+            if answered is False:
+                result = getattr(response, "result", None)
+                if result is not None and result.result not in (Result.RESULT_OK,):
+                    key = f"{srv.srv_name}:{result.result}"
+                    if key not in self._warned:
+                        self._warned.add(key)
+                        log.warning("%s refused (logged once per kind): %s", srv.srv_name, result.error_message)
+                srv.send_response(response, header)
+
+        return handle
+
+    # ------------------------------------------------------------------ state
+    @property
+    def state(self) -> int:
+        """The SimulationState constant of the simulation now."""
+        c = self.sim.control
+        if self.stopped:
+            return SimulationState.STATE_STOPPED
+        if c.stop:
+            return SimulationState.STATE_QUITTING
+        return SimulationState.STATE_PAUSED if (c.paused or c.lockstep) else SimulationState.STATE_PLAYING
+
+    def on_step(self, sim: Simulation) -> None:
+        """Answer step requests whose target step was reached."""
+        if self.waiters:
+            done = [w for w in self.waiters if sim.step_count >= w.target]
+            if done:
+                self.waiters = [w for w in self.waiters if sim.step_count < w.target]
+                for w in done:
+                    w.done(_result(Result.RESULT_OK))
+
+    def fail_waiters(self, why: str) -> None:
+        """Answer every pending step request with a failure."""
+        waiters, self.waiters = self.waiters, []
+        for w in waiters:
+            w.done(_result(Result.RESULT_OPERATION_FAILED, why))
+
+    # ------------------------------------------------------------------ services: (request, response, reply)
+    # Each returns False to have ``response`` sent now, or True if it answers later through ``reply``.
+    def _get_simulator_features(self, req: Any, res: Any, reply: Any) -> bool:
+        res.features.features = list(SUPPORTED)
+        res.features.spawn_formats = []
+        res.features.custom_info = ("sigcore: time never goes back on reset (SCOPE_TIME unsupported); "
+                                    "spawning/deleting unsupported; sig_ros API as <agent>_<suffix>")
+        return False
+
+    def _filter(self, filters: Any, res: Any) -> list[str] | None:
+        if filters.bounds.type != 0 or len(filters.bounds.points):
+            res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED, "bounds filters are not supported")
+            return None
+        if len(filters.categories):
+            res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED, "entity categories are not supported")
+            return None
+        names = list(self.sim.entity_names)
+        if filters.filter:
+            try:
+                pattern = re.compile(filters.filter)
+            except re.error as e:
+                res.result = _result(Result.RESULT_OPERATION_FAILED, f"filter '{filters.filter}': {e}")
+                return None
+            names = [n for n in names if pattern.search(n)]
+        tags = set(filters.tags.tags)
+        if tags:
+            mode_all = filters.tags.filter_mode == 1
+            def ok(n: str) -> bool:
+                have = set(getattr(self._models[n], "tags", ()))
+                return tags <= have if mode_all else bool(tags & have)
+            names = [n for n in names if ok(n)]
+        res.result = _result(Result.RESULT_OK)
+        return names
+
+    def _get_entities(self, req: Any, res: Any, reply: Any) -> bool:
+        names = self._filter(req.filters, res)
+        if names is not None:
+            res.entities = names
+        return False
+
+    def _entity_state(self, name: str) -> EntityState:
+        backend = self.sim.backend
+        pos, quat = backend.get_pose(name)
+        lin, ang = backend.get_velocity(name)
+        st = EntityState()
+        st.header.stamp, st.header.frame_id = stamp(self.sim.step_count, self.dt_ns), "world"
+        p = st.pose
+        p.position.x, p.position.y, p.position.z = (float(v) for v in pos)
+        p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z = (float(v) for v in quat)
+        st.twist.linear.x, st.twist.linear.y, st.twist.linear.z = (float(v) for v in lin)
+        st.twist.angular.x, st.twist.angular.y, st.twist.angular.z = (float(v) for v in ang)
+        return st
+
+    def _unknown(self, name: str, res: Any) -> bool:
+        if name in self.sim.entity_names:
+            return False
+        res.result = _result(Result.RESULT_NOT_FOUND,
+                             f"no entity '{name}'; entities: {', '.join(self.sim.entity_names)}")
+        return True
+
+    def _get_entity_state(self, req: Any, res: Any, reply: Any) -> bool:
+        if not self._unknown(req.entity, res):
+            res.state = self._entity_state(req.entity)
+            res.result = _result(Result.RESULT_OK)
+        return False
+
+    def _get_entities_states(self, req: Any, res: Any, reply: Any) -> bool:
+        names = self._filter(req.filters, res)
+        if names is not None:
+            res.entities = names
+            res.states = [self._entity_state(n) for n in names]
+        return False
+
+    def _set_entity_state(self, req: Any, res: Any, reply: Any) -> bool:
+        if self._unknown(req.entity, res):
+            return False
+        st = req.state
+        if st.header.frame_id not in ("", "world"):
+            res.result = _result(Result.RESULT_OPERATION_FAILED,
+                                 f"frame '{st.header.frame_id}' is not supported; use '' or 'world'")
+            return False
+        p, o = st.pose.position, st.pose.orientation
+        q = (o.w, o.x, o.y, o.z)
+        norm = math.sqrt(sum(v * v for v in q)) if finite(*q) else 0.0
+        if not finite(p.x, p.y, p.z) or norm < 1e-9:
+            res.result = _result(SetEntityState.Response.INVALID_POSE,
+                                 "pose must be finite with a non-zero quaternion (w=1 for no rotation)")
+            return False
+        lin, ang = st.twist.linear, st.twist.angular
+        twist = (lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+        if not finite(*twist):
+            res.result = _result(Result.RESULT_OPERATION_FAILED, "twist must be finite")
+            return False
+        handle = self.sim.agent(req.entity)
+        moving = any(v != 0.0 for v in twist)
+        if moving and not self.sim.modes(req.entity)["dynamics"]:
+            res.result = _result(Result.RESULT_OPERATION_FAILED,
+                                 f"'{req.entity}' is static (dynamics off): it cannot be given a velocity")
+            return False
+        try:
+            handle.set_position((p.x, p.y, p.z))
+            handle.set_rotation(q)
+            if self.sim.modes(req.entity)["dynamics"]:
+                handle.set_velocity((lin.x, lin.y, lin.z))
+                handle.set_angular_velocity((ang.x, ang.y, ang.z))
+        except ApiError as e:
+            res.result = _result(Result.RESULT_OPERATION_FAILED, str(e))
+            return False
+        res.result = _result(Result.RESULT_OK)
+        return False
+
+    def _spawn_entity(self, req: Any, res: Any, reply: Any) -> bool:
+        res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
+                             "spawning is not supported: the backend builds the world once; add the entity "
+                             "to the world file")
+        return False
+
+    def _delete_entity(self, req: Any, res: Any, reply: Any) -> bool:
+        res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
+                             "deleting is not supported; move the entity away with set_entity_state")
+        return False
+
+    def _get_simulation_state(self, req: Any, res: Any, reply: Any) -> bool:
+        res.state.state = self.state
+        res.result = _result(Result.RESULT_OK)
+        return False
+
+    def _set_simulation_state(self, req: Any, res: Any, reply: Any) -> bool:
+        target, now, c = req.state.state, self.state, self.sim.control
+        s = SimulationState
+        if target == now:
+            res.result = _result(SetSimulationState.Response.ALREADY_IN_TARGET_STATE, "already in that state")
+            return False
+        if target == s.STATE_PLAYING:
+            self.stopped = False
+            c.paused, c.lockstep = False, False
+        elif target == s.STATE_PAUSED:
+            self.stopped = False
+            c.paused = True
+        elif target == s.STATE_STOPPED:
+            c.paused, c.pending_steps = True, 0
+            self.fail_waiters("the simulation was stopped")
+            self.sim.reset()
+            self.stopped = True
+            self.on_reset()
+        elif target == s.STATE_QUITTING:
+            self.fail_waiters("the simulation is quitting")
+            c.stop = True
+        else:
+            res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
+                                 f"state {target} cannot be set; valid: 0 stopped, 1 playing, 2 paused, 3 quitting")
+            return False
+        res.result = _result(Result.RESULT_OK)
+        return False
+
+    def _reset_simulation(self, req: Any, res: Any, reply: Any) -> bool:
+        scope = req.scope
+        if scope == ResetSimulation.Request.SCOPE_TIME:
+            res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
+                                 "sigcore's time never goes back: reset the state (SCOPE_STATE or SCOPE_ALL)")
+            return False
+        self.sim.reset()
+        self.on_reset()
+        res.result = _result(Result.RESULT_OK)
+        return False
+
+    def _step_simulation(self, req: Any, res: Any, reply: Any) -> bool:
+        steps = int(req.steps)
+        if self.state != SimulationState.STATE_PAUSED and not self.stopped:
+            res.result = _result(Result.RESULT_OPERATION_FAILED,
+                                 "step_simulation needs the simulation paused (set_simulation_state PAUSED)")
+            return False
+        if steps <= 0:
+            res.result = _result(Result.RESULT_OK)
+            return False
+        if steps > 10_000_000:
+            res.result = _result(Result.RESULT_OPERATION_FAILED, f"{steps} steps is too many (max 10000000)")
+            return False
+        self.add_steps(steps, lambda result: reply(StepSimulation.Response(result=result)))
+        return True
+
+    def add_steps(self, steps: int, done: Any) -> StepWaiter:
+        """Queue ``steps`` steps (simulation paused); ``done(Result)`` is called when they are taken."""
+        c = self.sim.control
+        if self.stopped:
+            self.stopped = False
+            c.paused = True
+        c.pending_steps += steps
+        waiter = StepWaiter(self.sim.step_count + c.pending_steps, done)
+        self.waiters.append(waiter)
+        return waiter
+
+    def cancel_steps(self, waiter: StepWaiter) -> None:
+        """Drop the steps of ``waiter`` that were not taken yet."""
+        if waiter in self.waiters:
+            self.waiters.remove(waiter)
+            remaining = max(0, waiter.target - self.sim.step_count)
+            self.sim.control.pending_steps = max(0, self.sim.control.pending_steps - remaining)
+
+
+class SimulateStepsAction:
+    """The ``simulate_steps`` action on its own small node and executor thread (feedback as steps are taken).
+
+    The execute callback hands the request to the simulation thread through ``submit`` and waits for it.
+    """
+
+    def __init__(self, node: Node, name: str, interfaces: SimInterfaces, submit: Any) -> None:
+        from rclpy.action import ActionServer, CancelResponse, GoalResponse
+        from rclpy.callback_groups import ReentrantCallbackGroup
+        from simulation_interfaces.action import SimulateSteps
+
+        self.interfaces = interfaces
+        self.submit = submit
+        self.closing = False
+        self.SimulateSteps = SimulateSteps
+        self.server = ActionServer(node, SimulateSteps, name, execute_callback=self._execute,
+                                   goal_callback=lambda _g: GoalResponse.ACCEPT,
+                                   cancel_callback=lambda _g: CancelResponse.ACCEPT,
+                                   callback_group=ReentrantCallbackGroup())
+
+    def _execute(self, goal: Any) -> Any:
+        action = self.SimulateSteps
+        steps = int(goal.request.steps)
+        sim = self.interfaces.sim
+        finished = threading.Event()
+        outcome: dict[str, Any] = {}
+
+        def start() -> None:
+            i = self.interfaces
+            if i.state != SimulationState.STATE_PAUSED and not i.stopped:
+                outcome["result"] = _result(Result.RESULT_OPERATION_FAILED,
+                                            "simulate_steps needs the simulation paused")
+                finished.set()
+                return
+            outcome["start"] = sim.step_count
+            if steps <= 0:
+                outcome["result"] = _result(Result.RESULT_OK)
+                finished.set()
+                return
+
+            def done(result: Result) -> None:
+                outcome["result"] = result
+                finished.set()
+
+            outcome["waiter"] = i.add_steps(steps, done)
+
+        self.submit(start)
+        canceled = False
+        while not finished.wait(0.02):
+            if self.closing:
+                outcome.setdefault("result", _result(Result.RESULT_OPERATION_FAILED, "the simulation stopped"))
+                break
+            if goal.is_cancel_requested and not canceled and "waiter" in outcome:
+                canceled = True
+                waiter = outcome["waiter"]
+
+                def cancel(waiter: StepWaiter = waiter) -> None:
+                    self.interfaces.cancel_steps(waiter)
+                    outcome["result"] = _result(Result.RESULT_OPERATION_FAILED, "canceled")
+                    finished.set()
+
+                self.submit(cancel)
+            if "start" in outcome:
+                done_steps = min(steps, max(0, sim.step_count - outcome["start"]))
+                goal.publish_feedback(action.Feedback(completed_steps=done_steps,
+                                                      remaining_steps=steps - done_steps))
+        if "start" in outcome:  # a last feedback, also when the steps were taken within one wait
+            done_steps = min(steps, max(0, sim.step_count - outcome["start"]))
+            goal.publish_feedback(action.Feedback(completed_steps=done_steps, remaining_steps=steps - done_steps))
+        result = outcome.get("result", _result(Result.RESULT_OPERATION_FAILED, "no result"))
+        if canceled and result.error_message == "canceled":
+            goal.canceled()
+        elif result.result == Result.RESULT_OK:
+            goal.succeed()
+        else:
+            goal.abort()
+        return action.Result(result=result)

@@ -1,0 +1,110 @@
+"""Processes of the ROS 2 transport tests: a simulation process, client processes, a private ROS domain.
+
+Every process runs in its own session and is killed by process group in ``finally``; each module uses its own
+``ROS_DOMAIN_ID`` (derived from the pid) with discovery limited to this machine.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).parent
+CLIENTS = HERE / "clients"
+WORLD = HERE.parent / "data" / "sim" / "world.xml"
+_domains = itertools.count()
+
+
+def _kill(proc: subprocess.Popen[str]) -> None:
+    if proc.poll() is None:
+        try:
+            os.killpg(proc.pid, signal.SIGINT)
+            proc.wait(timeout=3)
+        except (ProcessLookupError, subprocess.TimeoutExpired):
+            pass
+    if proc.poll() is None:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait(timeout=5)
+
+
+class SimProcess:
+    """``python -m sigcore run --transport ros2 WORLD`` in its own session; its log is kept in a file."""
+
+    def __init__(self, env: dict[str, str], world: Path, log: Path, *args: str) -> None:
+        self.env, self.log = env, log
+        self._log = open(log, "w")  # noqa: SIM115 - closed in stop()
+        self.proc = subprocess.Popen([sys.executable, "-m", "sigcore", "run", "--transport", "ros2", "-q",
+                                      str(world), *args], env=env, stdout=self._log, stderr=subprocess.STDOUT,
+                                     text=True, start_new_session=True)
+
+    def alive(self) -> bool:
+        """Whether the simulation process still runs."""
+        return self.proc.poll() is None
+
+    def output(self) -> str:
+        """Everything the simulation printed and logged so far."""
+        self._log.flush()
+        return self.log.read_text()
+
+    def stop(self) -> None:
+        """Kill the process group."""
+        _kill(self.proc)
+        self._log.close()
+
+    def client(self, script: str, *args: str, timeout: float = 60.0) -> dict:
+        """Run ``clients/<script>`` with this simulation's ROS environment; its JSON result (last line)."""
+        proc = subprocess.Popen([sys.executable, str(CLIENTS / script), *args], env=self.env,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+        try:
+            out, err = proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            _kill(proc)
+            out, err = proc.communicate()
+            raise AssertionError(f"client {script} timed out after {timeout} s; stderr:\n{err[-3000:]}") from None
+        finally:
+            _kill(proc)
+        lines = [line for line in out.splitlines() if line.startswith("{")]
+        assert proc.returncode == 0 and lines, \
+            f"client {script} failed ({proc.returncode}):\n{out[-2000:]}\n{err[-3000:]}"
+        return json.loads(lines[-1])
+
+
+def ros_env() -> dict[str, str]:
+    """The environment of a test's processes: a private domain, discovery on this machine only."""
+    env = dict(os.environ)
+    env["ROS_DOMAIN_ID"] = str(1 + (os.getpid() * 7 + next(_domains) * 13) % 100)
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    env["PYTHONUNBUFFERED"] = "1"
+    env.pop("ROS_STATIC_PEERS", None)
+    return env
+
+
+def start_sim(tmp: Path, world: Path = WORLD, *args: str) -> SimProcess:
+    """Start a simulation and wait (bounded) for it to announce readiness."""
+    sim = SimProcess(ros_env(), world, tmp / "sim.log", *args)
+    try:
+        ready = sim.client("ready.py", timeout=90)
+        assert ready["ready"], sim.output()
+    except BaseException:
+        sim.stop()
+        raise
+    return sim
+
+
+def wait_until(predicate: object, timeout: float = 10.0) -> bool:
+    """Poll ``predicate()`` every 50 ms up to ``timeout`` [s]."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if predicate():  # type: ignore[operator]
+            return True
+        time.sleep(0.05)
+    return False
