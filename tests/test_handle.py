@@ -1,4 +1,5 @@
-"""The agent handle API against the real MuJoCo state: set then get, drive then measure, grasp rules."""
+"""The agent handle API against the real engine state, on every registered backend (MuJoCo, PyBullet, ...): set
+then get, drive then measure, grasp rules."""
 
 from __future__ import annotations
 
@@ -7,9 +8,17 @@ import math
 import numpy as np
 import pytest
 
+from sigcore import plugins
 from sigcore.agent import ApiError, GraspError, GraspRefusal
 from sigcore.geometry import quat_from_axis_angle, quat_rotate
 from sigcore.sim import Simulation
+from sigcore.world import World
+
+
+@pytest.fixture(params=sorted(plugins.backends()))
+def sim(request: pytest.FixtureRequest, core_world: World) -> Simulation:
+    """A fresh simulation of the core world on each registered backend (overrides conftest's MuJoCo-only one)."""
+    return Simulation(core_world, request.param)
 
 
 def test_position_round_trip(sim: Simulation) -> None:

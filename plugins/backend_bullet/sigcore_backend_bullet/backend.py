@@ -1,0 +1,502 @@
+"""The PyBullet implementation of :class:`sigcore.backend.Backend`.
+
+One PyBullet client per backend instance, in ``DIRECT`` mode; every call passes ``physicsClientId``, so any
+number of simulations live in one process. Techniques (each checked by ``tests/backends`` and
+``tests/backend_bullet``):
+
+* **Stepping.** ``setPhysicsEngineParameter(fixedTimeStep=world.timestep, numSubSteps=0,
+  deterministicOverlappingPairs=1)``; :meth:`BulletBackend.step` is ``stepSimulation`` plus, only when needed,
+  a pre-step (servo force limits, gravity compensation) and a post-step (held entities).
+* **Link frames.** Child links: ``getLinkState`` indices 4/5 (URDF frame). The base: PyBullet keeps it at its
+  inertial frame, converted with the URDF ``<inertial><origin>`` (see :mod:`.frames`).
+* **Wrenches** go straight to ``applyExternalForce`` (world frame, at the link's centre of mass) and
+  ``applyExternalTorque``; PyBullet clears both after every ``stepSimulation``. Joint torques:
+  ``TORQUE_CONTROL``, also cleared after a step, added on top of the joint's motor.
+* **Gravity off** (PyBullet has only a global gravity): before every step, a force ``-m g`` at the centre of
+  mass of each link of the entity.
+* **Dynamics off** (held entities): after every step the base pose and joint positions are restored and the
+  velocities zeroed (the MuJoCo backend's technique); ``set_pose``/``set_joint_angle`` update the held values.
+  Static objects have mass 0 (PyBullet's static bodies) and cannot become dynamic.
+* **Servos.** Arm joints in position mode: a velocity motor at ``(kp / kv) (target - q)`` whose force limit is
+  set before each step to the spring-damper torque ``|kp e - kv qdot|`` (see :mod:`.servo`), at most the gains'
+  ``max_torque`` and the URDF ``effort``. Wheels and velocity mode: ``VELOCITY_CONTROL`` with force = the torque
+  limit (an exact, torque-limited velocity motor, a brake at 0).
+* **Reset:** ``restoreState`` of a state saved after build (poses, velocities, joint states), then grasps
+  removed, masses, collision filters, motors and modes restored.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import ClassVar
+
+import numpy as np
+import numpy.typing as npt
+import pybullet as pb
+
+from sigcore.backend import GROUND, MAIN, Array, Backend, BackendError
+from sigcore.world.models import Object, Robot, World
+
+from . import grasp, rays
+from .builder import build_world
+from .contacts import ContactMap
+from .frames import compose, invert, to_wxyz, to_xyzw
+from .layout import BASE, EntityIndex, JointIndex
+from .servo import ServoBank
+
+
+class BulletBackend(Backend):
+    """PyBullet physics. See the module docstring for how each feature is done.
+
+    Attributes:
+        client: The PyBullet physics client id (after :meth:`build`), for reading (e.g. rendering); writing
+            through it bypasses the backend's bookkeeping.
+    """
+
+    name: ClassVar[str] = "bullet"
+
+    def __init__(self) -> None:
+        self.client = -1
+        self._built = False
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001 - at interpreter exit pybullet may already be torn down
+            pass
+
+    def close(self) -> None:
+        """Disconnect the PyBullet client (also done when the backend is garbage-collected)."""
+        if self.client >= 0:
+            try:
+                pb.disconnect(physicsClientId=self.client)
+            except pb.error:
+                pass
+            self.client = -1
+            self._built = False
+
+    # ------------------------------------------------------------------ life cycle
+    def build(self, world: World) -> None:
+        """Create ``world`` in a new ``DIRECT`` client (see :mod:`.builder` for the layout).
+
+        Raises:
+            BackendError: a model file is missing or PyBullet rejects a model; the message names the entity.
+        """
+        self.close()
+        self.client = pb.connect(pb.DIRECT)
+        self._world = world
+        self._populate()
+
+    def _populate(self) -> None:
+        """Create the world in the (empty) client and save the initial state."""
+        c, world = self.client, self._world
+        pb.setPhysicsEngineParameter(fixedTimeStep=world.timestep, numSubSteps=0, deterministicOverlappingPairs=1,
+                                     physicsClientId=c)
+        pb.setGravity(*world.gravity, physicsClientId=c)
+        self._gravity = np.array(world.gravity, dtype=np.float64)
+        try:
+            self._ground, entities = build_world(c, world)
+        except BackendError:
+            self.close()
+            raise
+        self._entities: dict[str, EntityIndex] = {e.name: e for e in entities}
+        self._part_table: list[tuple[str, str]] = [(GROUND, MAIN)]
+        self._part_id: dict[tuple[int, int], int] = {(self._ground, BASE): 0}
+        for e in entities:
+            main_id = len(self._part_table)
+            for part in e.parts:
+                self._part_id[(e.body, e.link(part))] = len(self._part_table)
+                self._part_table.append((e.name, part))
+            for link in e.links:
+                self._part_id.setdefault((e.body, link), main_id)  # a URDF object's links are its main part
+        entity_of_body = {e.body: i + 1 for i, e in enumerate(entities)}
+        entity_of_body[self._ground] = 0
+        self._contact_map = ContactMap(self._part_id, entity_of_body)
+        self._graspable = {(r.name, g.part, o.name) for r in world.entities if isinstance(r, Robot)
+                           for g in r.grippers for o in world.entities
+                           if isinstance(o, Object) and o.graspable and not o.static}
+        self._built = True
+        self._restart_motors()
+        self._state0 = pb.saveState(physicsClientId=c)
+        self._collision_off: set[str] = set()
+        self._filters_changed = False
+        self._restart()
+
+    def _restart(self) -> None:
+        """Bookkeeping of the initial state (after build or reset)."""
+        self._tick = 0
+        self._contacts_tick = -1
+        self._contacts: frozenset[tuple[int, int]] = frozenset()
+        self._grasps: dict[tuple[str, str, str], int] = {}
+        self._mass = {n: list(e.masses0) for n, e in self._entities.items()}
+        self._nograv: set[str] = set()
+        self._held: dict[str, tuple[list[float], list[float], list[float]]] = {}
+        for e in self._entities.values():
+            if e.held0:
+                self._hold(e)
+
+    def _restart_motors(self) -> None:
+        c = self.client
+        self._servos: dict[str, ServoBank] = {}
+        for e in self._entities.values():
+            bank = ServoBank(e.body)
+            for j in e.joints.values():
+                if not j.wheel:
+                    bank.add(j.index, j.kp, j.kv, j.position_gain, j.max_torque)
+            if bank.kp:
+                self._servos[e.name] = bank
+            for j in e.joints.values():
+                if j.wheel:
+                    pb.setJointMotorControl2(e.body, j.index, pb.VELOCITY_CONTROL, targetVelocity=0.0,
+                                             force=j.max_torque, physicsClientId=c)
+                else:
+                    j.initial = float(pb.getJointState(e.body, j.index, physicsClientId=c)[0])
+                    self._position_servo(e, j, j.initial)
+
+    def _position_servo(self, e: EntityIndex, j: JointIndex, angle: float) -> None:
+        self._servos[e.name].hold(j.index, angle)  # the motor is set before each step (see servo.py)
+
+    def step(self) -> None:
+        """Advance by one timestep (``stepSimulation``), compensating gravity and restoring held entities."""
+        if self._nograv:
+            self._compensate_gravity()
+        for name, bank in self._servos.items():
+            if name not in self._held:
+                bank.update(self.client)
+        pb.stepSimulation(physicsClientId=self.client)
+        self._tick += 1
+        if self._held:
+            self._restore_held()
+
+    def _compensate_gravity(self) -> None:
+        c = self.client
+        for name in self._nograv:
+            if name in self._held:
+                continue
+            e = self._entities[name]
+            masses = self._mass[name]
+            for link, m in zip(e.links, masses, strict=True):
+                if m > 0.0:
+                    com = grasp.inertial_pose(c, e.body, link)[0]
+                    pb.applyExternalForce(e.body, link, (-m * self._gravity).tolist(), com, pb.WORLD_FRAME,
+                                          physicsClientId=c)
+
+    def _restore_held(self) -> None:
+        c = self.client
+        for name, (pos, orn, angles) in self._held.items():
+            e = self._entities[name]
+            if not e.welded:
+                pb.resetBasePositionAndOrientation(e.body, pos, orn, physicsClientId=c)
+                pb.resetBaseVelocity(e.body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)
+            for j, q in zip(e.joints.values(), angles, strict=True):
+                pb.resetJointState(e.body, j.index, q, 0.0, physicsClientId=c)
+
+    def _hold(self, e: EntityIndex) -> None:
+        c = self.client
+        pos, orn = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)
+        angles = [float(pb.getJointState(e.body, j.index, physicsClientId=c)[0]) for j in e.joints.values()]
+        self._held[e.name] = (list(pos), list(orn), angles)
+        if not e.welded:
+            pb.resetBaseVelocity(e.body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)
+        for j, q in zip(e.joints.values(), angles, strict=True):
+            pb.resetJointState(e.body, j.index, q, 0.0, physicsClientId=c)
+
+    def reset(self) -> None:
+        """Back to the state right after build.
+
+        ``restoreState`` of the state saved after build restores poses, velocities and joint states; grasps are
+        removed and masses, motors and modes restored here. If collision filters changed since (a collision
+        mode switched, a grasp made), the world is rebuilt in the same client instead: PyBullet re-inserts a
+        re-filtered link into the broadphase, which changes the pair order and so, slightly, every later
+        contact solution (0.2 mm after 0.5 s for a ball rolling off a hand), and ``restoreState`` does not undo
+        that. A rebuild takes about 45 ms for the clean-up world, a restore 0.1 ms.
+        """
+        c = self._client()
+        if self._filters_changed:
+            pb.resetSimulation(physicsClientId=c)
+            self._populate()
+            return
+        for e in self._entities.values():
+            masses = self._mass[e.name]
+            for i, link in enumerate(e.links):
+                if masses[i] != e.masses0[i] and not e.static:
+                    pb.changeDynamics(e.body, link, mass=e.masses0[i], localInertiaDiagonal=list(e.inertia0[i]),
+                                      physicsClientId=c)
+        pb.restoreState(self._state0, physicsClientId=c)
+        self._restart_motors()
+        self._restart()
+
+    # ------------------------------------------------------------------ introspection
+    def parts(self, entity: str) -> list[str]:
+        """Part names of ``entity``, main part first (a robot's root link; ``main`` otherwise)."""
+        return list(self._entity(entity).parts)
+
+    def joints(self, entity: str) -> list[str]:
+        """Movable joints of a robot in URDF order; empty for objects and humans."""
+        return list(self._entity(entity).joints)
+
+    def _client(self) -> int:
+        if not self._built:
+            raise BackendError("the PyBullet backend has no world yet; call build(world) first")
+        return self.client
+
+    def _entity(self, name: str) -> EntityIndex:
+        self._client()
+        entity = self._entities.get(name)
+        if entity is None:
+            raise BackendError(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
+        return entity
+
+    # ------------------------------------------------------------------ state
+    def _frame(self, e: EntityIndex, link: int) -> tuple[Sequence[float], Sequence[float]]:
+        """World pose of a link's URDF frame, ``(x, y, z, w)``."""
+        c = self.client
+        if link == BASE:
+            pos, orn = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)
+            inv_pos, inv_orn = invert(e.local_pos, e.local_orn)
+            return compose(pos, orn, inv_pos, inv_orn)
+        state = pb.getLinkState(e.body, link, computeForwardKinematics=1, physicsClientId=c)
+        return state[4], state[5]
+
+    def get_pose(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
+        """World position [m] and orientation (w, x, y, z) of the part's URDF link frame."""
+        e = self._entity(entity)
+        pos, orn = self._frame(e, e.link(part))
+        return np.array(pos, dtype=np.float64), to_wxyz(orn)
+
+    def set_pose(self, entity: str, position: Array | None = None, quaternion: Array | None = None) -> None:
+        """Teleport the base so that its URDF frame has this pose (``resetBasePositionAndOrientation``)."""
+        e = self._entity(entity)
+        pos, orn = self._frame(e, BASE)
+        new_pos = [float(x) for x in position] if position is not None else list(pos)
+        new_orn = to_xyzw(quaternion) if quaternion is not None else list(orn)
+        ipos, iorn = compose(new_pos, new_orn, e.local_pos, e.local_orn)
+        pb.resetBasePositionAndOrientation(e.body, ipos, iorn, physicsClientId=self.client)
+        if e.name in self._held:
+            self._hold(e)
+        self._tick += 1
+
+    def get_velocity(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
+        """Linear [m/s] and angular [rad/s] velocity of the part's frame origin: ``v_com + w x (o - com)``."""
+        e = self._entity(entity)
+        link = e.link(part)
+        c = self.client
+        if link == BASE:
+            lin, ang = pb.getBaseVelocity(e.body, physicsClientId=c)
+            com = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)[0]
+            origin = self._frame(e, BASE)[0]
+        else:
+            s = pb.getLinkState(e.body, link, computeLinkVelocity=1, computeForwardKinematics=1,
+                                physicsClientId=c)
+            com, origin, lin, ang = s[0], s[4], s[6], s[7]
+        w = np.array(ang, dtype=np.float64)
+        v = np.array(lin, dtype=np.float64) + np.cross(w, np.subtract(origin, com))
+        return v, w
+
+    def set_velocity(self, entity: str, linear: Array | None = None, angular: Array | None = None) -> None:
+        """Set the base's velocity (``resetBaseVelocity`` at its centre of mass); no effect if welded."""
+        e = self._entity(entity)
+        if e.welded:
+            return
+        lin0, ang0 = self.get_velocity(entity)
+        lin = np.asarray(linear, dtype=np.float64) if linear is not None else lin0
+        ang = np.asarray(angular, dtype=np.float64) if angular is not None else ang0
+        c = self.client
+        com = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)[0]
+        origin = self._frame(e, BASE)[0]
+        v_com = lin + np.cross(ang, np.subtract(com, origin))
+        pb.resetBaseVelocity(e.body, v_com.tolist(), ang.tolist(), physicsClientId=c)
+        self._tick += 1
+
+    def get_com(self, entity: str, part: str | None = None) -> Array:
+        """Centre of mass [m] of a robot link, or of a whole object or human (all its links)."""
+        e = self._entity(entity)
+        link = e.link(part)
+        c = self.client
+        if e.kind == "robot" or len(e.links) == 1:
+            return np.array(grasp.inertial_pose(c, e.body, link)[0], dtype=np.float64)
+        masses = np.array(self._mass[entity])
+        coms = np.array([grasp.inertial_pose(c, e.body, k)[0] for k in e.links])
+        total = float(masses.sum())
+        return (masses @ coms) / total if total > 0 else coms[0]
+
+    def apply_wrench(self, entity: str, part: str | None, force: Array, torque: Array) -> None:
+        """``applyExternalForce`` at the link's centre of mass and ``applyExternalTorque``, world frame."""
+        e = self._entity(entity)
+        link = e.link(part)
+        c = self.client
+        if np.any(force):
+            com = grasp.inertial_pose(c, e.body, link)[0]
+            pb.applyExternalForce(e.body, link, [float(x) for x in force], com, pb.WORLD_FRAME, physicsClientId=c)
+        if np.any(torque):
+            pb.applyExternalTorque(e.body, link, [float(x) for x in torque], pb.WORLD_FRAME, physicsClientId=c)
+
+    # ------------------------------------------------------------------ properties and modes
+    def get_mass(self, entity: str) -> float:
+        """Sum of the masses [kg] of the entity's links."""
+        return float(sum(self._mass[self._entity(entity).name]))
+
+    def set_mass(self, entity: str, mass: float) -> None:
+        """Scale every link's mass and inertia so that they total ``mass`` [kg] (``changeDynamics``)."""
+        e = self._entity(entity)
+        masses = self._mass[entity]
+        total = sum(masses)
+        if total <= 0.0:
+            raise BackendError(f"{e.kind} '{e.name}' has no mass to scale (its URDF has no <inertial>)")
+        factor = mass / total
+        for i, link in enumerate(e.links):
+            masses[i] *= factor
+            if not e.static and masses[i] > 0.0:
+                inertia = [x * masses[i] / e.masses0[i] for x in e.inertia0[i]]
+                pb.changeDynamics(e.body, link, mass=masses[i], localInertiaDiagonal=inertia,
+                                  physicsClientId=self.client)
+
+    def set_gravity_mode(self, entity: str, enabled: bool) -> None:
+        """Gravity off: a force ``-m g`` at every link's centre of mass before each step."""
+        e = self._entity(entity)
+        if enabled:
+            self._nograv.discard(e.name)
+        else:
+            self._nograv.add(e.name)
+
+    def set_dynamics_mode(self, entity: str, enabled: bool) -> None:
+        """Dynamics off holds the base and every joint where they are now.
+
+        Raises:
+            BackendError: enabling dynamics of a static object (PyBullet holds it with mass 0).
+        """
+        e = self._entity(entity)
+        if e.static:
+            if enabled:
+                raise BackendError(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "
+                                   "cannot become dynamic; move it with set_pose")
+            return
+        if enabled:
+            self._held.pop(e.name, None)
+        else:
+            self._hold(e)
+            self._tick += 1
+
+    def set_collision_mode(self, entity: str, enabled: bool) -> None:
+        """Collision off puts every link in a filter group that collides with nothing (rays still see it; see the
+        table in :mod:`.layout`)."""
+        e = self._entity(entity)
+        if enabled == (e.name not in self._collision_off):
+            return
+        if enabled:
+            self._collision_off.discard(e.name)
+        else:
+            self._collision_off.add(e.name)
+        self._filters_changed = True
+        self._filter(e, enabled)
+
+    def _filter(self, e: EntityIndex, enabled: bool) -> None:
+        for link in e.links:
+            pb.setCollisionFilterGroupMask(e.body, link, *e.filter_bits(link, enabled), physicsClientId=self.client)
+
+    # ------------------------------------------------------------------ joints
+    def get_joint_angle(self, entity: str, joint: str) -> float:
+        """``getJointState`` position [rad] or [m]."""
+        e = self._entity(entity)
+        return float(pb.getJointState(e.body, e.joint(joint).index, physicsClientId=self.client)[0])
+
+    def set_joint_angle(self, entity: str, joint: str, angle: float) -> None:
+        """``resetJointState`` (velocity 0); an arm joint's position servo then holds ``angle``."""
+        e = self._entity(entity)
+        j = e.joint(joint)
+        pb.resetJointState(e.body, j.index, angle, 0.0, physicsClientId=self.client)
+        if not j.wheel:
+            self._position_servo(e, j, angle)
+        if e.name in self._held:
+            self._hold(e)
+        self._tick += 1
+
+    def get_joint_velocity(self, entity: str, joint: str) -> float:
+        """``getJointState`` velocity [rad/s] or [m/s]."""
+        e = self._entity(entity)
+        return float(pb.getJointState(e.body, e.joint(joint).index, physicsClientId=self.client)[1])
+
+    def set_joint_target(self, entity: str, joint: str, angle: float) -> None:
+        """Position servo towards ``angle``.
+
+        Raises:
+            BackendError: the joint is a drive wheel (always a velocity servo).
+        """
+        e = self._entity(entity)
+        j = e.joint(joint)
+        if j.wheel:
+            arms = [n for n, x in e.joints.items() if not x.wheel]
+            raise BackendError(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
+                               f"use set_joint_velocity; joints with position control: "
+                               f"{', '.join(arms) or 'none'}")
+        self._position_servo(e, j, angle)
+
+    def set_joint_velocity(self, entity: str, joint: str, velocity: float,
+                           max_torque: float | None = None) -> None:
+        """``VELOCITY_CONTROL`` at ``velocity`` with force ``max_torque`` (default: the drive's or the gains')."""
+        e = self._entity(entity)
+        j = e.joint(joint)
+        torque = j.max_torque if max_torque is None else max_torque
+        if not j.wheel:
+            self._servos[e.name].release(j.index)
+        pb.setJointMotorControl2(e.body, j.index, pb.VELOCITY_CONTROL, targetVelocity=velocity, force=torque,
+                                 physicsClientId=self.client)
+
+    def add_joint_torque(self, entity: str, joint: str, torque: float) -> None:
+        """``TORQUE_CONTROL`` for the next step (on top of the joint's motor)."""
+        e = self._entity(entity)
+        pb.setJointMotorControl2(e.body, e.joint(joint).index, pb.TORQUE_CONTROL, force=torque,
+                                 physicsClientId=self.client)
+
+    def get_joint_position(self, entity: str, joint: str) -> Array:
+        """World position [m] of the joint anchor: the child link's URDF frame origin."""
+        e = self._entity(entity)
+        return np.array(self._frame(e, e.joint(joint).index)[0], dtype=np.float64)
+
+    # ------------------------------------------------------------------ grasping
+    def attach(self, entity: str, part: str, obj: str) -> None:
+        """A ``JOINT_FIXED`` constraint between ``part`` and ``obj`` at their current relative pose.
+
+        Raises:
+            BackendError: ``part`` is not a gripper of ``entity`` or ``obj`` is not a graspable dynamic object.
+        """
+        robot, target = self._entity(entity), self._entity(obj)
+        key = (entity, part, obj)
+        if key in self._grasps:
+            return
+        if key not in self._graspable:
+            pairs = sorted(f"{p} + {o}" for (r, p, o) in self._graspable if r == entity)
+            raise BackendError(f"'{entity}' cannot attach '{obj}' to '{part}': only <gripper> parts hold "
+                               f"graspable, non-static objects; possible: {', '.join(pairs) or 'none'}")
+        self._grasps[key] = grasp.attach(self.client, robot, robot.link(part), target)
+        self._filters_changed = True
+
+    def detach(self, entity: str, part: str, obj: str) -> None:
+        """Remove the constraint (no effect if not attached)."""
+        cid = self._grasps.pop((entity, part, obj), None)
+        if cid is not None:
+            grasp.detach(self.client, cid, self._entity(entity), self._entity(obj))
+
+    # ------------------------------------------------------------------ contacts and rays
+    def contacts(self) -> frozenset[tuple[int, int]]:
+        """Part-id pairs touching after the last step (``getContactPoints``, computed once per step)."""
+        if self._contacts_tick != self._tick:
+            self._contacts = self._contact_map.pairs(self.client)
+            self._contacts_tick = self._tick
+        return self._contacts
+
+    def part_of(self, part_id: int) -> tuple[str, str]:
+        """``(entity, part)`` of a part id; ``("ground", "main")`` for 0."""
+        table = self._part_table
+        if not 0 <= part_id < len(table):
+            raise BackendError(f"no part id {part_id}; valid ids: 0..{len(table) - 1}")
+        return table[part_id]
+
+    def ray_cast(self, origin: Array, directions: npt.NDArray[np.float64], max_range: float,
+                 exclude: str | None = None) -> Array:
+        """``rayTestBatch`` against collision shapes, passing through ``exclude``'s links (see :mod:`.rays`)."""
+        c = self._client()
+        if exclude is None:
+            return rays.cast(c, origin, directions, max_range, None)
+        e = self._entity(exclude)
+        return rays.cast(c, origin, directions, max_range, e.body, e.links)

@@ -1,0 +1,231 @@
+"""A sigcore :class:`~sigcore.world.World` -> bodies in one PyBullet client.
+
+* the ground: a ``GEOM_PLANE`` multibody at z = 0 (entity ``ground``), friction 1;
+* an object: a multibody from ``createCollisionShape`` (box half extents = full lengths / 2; cylinder and
+  capsule ``height`` = the world's length) or a mesh (``GEOM_MESH``, collides as its convex hull), or its URDF
+  with ``loadURDF``; ``baseMass`` 0 / ``useFixedBase`` when ``static``;
+* a human: one multibody, a capsule and a sphere head, frame at the feet, inertial frame at their centre of mass;
+* a robot: ``loadURDF`` with ``URDF_USE_INERTIA_FROM_FILE`` (masses and inertias from ``<inertial>``) and
+  ``URDF_USE_IMPLICIT_CYLINDER`` (round wheels, not a polygon hull); fixed links stay links; no
+  self-collision (PyBullet's default without ``URDF_USE_SELF_COLLISION``).
+
+No visual shapes are made: the client runs in ``DIRECT`` mode and sigcore renders nothing through it.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pybullet as pb
+
+from sigcore.backend import MAIN, BackendError
+from sigcore.world.models import Human, Object, Robot, World
+from sigcore.world.urdf import UrdfError, read_urdf
+
+from .frames import quat_from_rpy
+from .layout import BASE, GROUP_STATIC, MASK_STATIC, EntityIndex, JointIndex
+from .urdf_prep import prepare_urdf, write_temp
+
+_URDF_FLAGS = pb.URDF_USE_INERTIA_FROM_FILE | pb.URDF_USE_IMPLICIT_CYLINDER
+_DEFAULT_FRICTION = 1.0
+"""Sliding friction of links without a friction tag (MuJoCo's default; PyBullet's own is 0.5)."""
+
+
+def build_world(client: int, world: World) -> tuple[int, list[EntityIndex]]:
+    """Create the ground and every entity of ``world`` in ``client``.
+
+    Returns:
+        The ground's body id, and one index per entity in world order.
+
+    Raises:
+        BackendError: a model file is missing or rejected; the message names the entity.
+    """
+    plane = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=client)
+    ground = pb.createMultiBody(0.0, plane, physicsClientId=client)
+    pb.changeDynamics(ground, BASE, lateralFriction=1.0, physicsClientId=client)
+    pb.setCollisionFilterGroupMask(ground, BASE, GROUP_STATIC, MASK_STATIC, physicsClientId=client)
+    entities: list[EntityIndex] = []
+    for entity in world.entities:
+        if isinstance(entity, Robot):
+            e = _add_robot(client, world, entity)
+        elif isinstance(entity, Human):
+            e = _add_human(client, entity)
+        elif entity.urdf is not None:
+            e = _add_urdf_object(client, world, entity)
+        else:
+            e = _add_shape_object(client, world, entity)
+        _finish(client, e)
+        if isinstance(entity, Object) and entity.urdf is not None and "mass" in entity.model_fields_set \
+                and not entity.static:
+            _scale_mass(client, e, entity.mass)
+        entities.append(e)
+    return ground, entities
+
+
+def _finish(client: int, e: EntityIndex) -> None:
+    """Record the base's inertial frame and the masses; set the collision filter of every link."""
+    if e.kind != "human":  # a human's frame (its feet) was set by _add_human
+        info = pb.getDynamicsInfo(e.body, BASE, physicsClientId=client)
+        e.local_pos, e.local_orn = tuple(info[3]), tuple(info[4])
+    known = len(e.masses0)  # a static primitive's mass is the world's (set by _add_shape_object)
+    for i, link in enumerate(e.links):
+        if i >= known:
+            d = pb.getDynamicsInfo(e.body, link, physicsClientId=client)
+            e.masses0.append(float(d[0]))
+            e.inertia0.append(tuple(d[2]))
+        pb.setCollisionFilterGroupMask(e.body, link, *e.filter_bits(link, True), physicsClientId=client)
+        # PyBullet damps every body by default (0.04 linear, 0.04 angular): F = m a must hold exactly
+        pb.changeDynamics(e.body, link, linearDamping=0.0, angularDamping=0.0, physicsClientId=client)
+
+
+def _scale_mass(client: int, e: EntityIndex, mass: float) -> None:
+    """Give a URDF object the world's total ``mass`` [kg]: every link's mass and inertia scaled alike."""
+    total = sum(e.masses0)
+    if total <= 0.0:
+        raise BackendError(f"object '{e.name}' has no mass to scale (its URDF has no <inertial>)")
+    factor = mass / total
+    for i, link in enumerate(e.links):
+        e.masses0[i] *= factor
+        ix, iy, iz = e.inertia0[i]
+        e.inertia0[i] = (ix * factor, iy * factor, iz * factor)
+        if e.masses0[i] > 0.0:
+            pb.changeDynamics(e.body, link, mass=e.masses0[i], localInertiaDiagonal=list(e.inertia0[i]),
+                              physicsClientId=client)
+
+
+def _load_urdf(client: int, path: Path, what: str, pose_xyz: tuple[float, float, float],
+               rpy: tuple[float, float, float], fixed: bool, scale: float = 1.0) -> tuple[int, dict[str, float],
+                                                                                       frozenset[str]]:
+    prepared = prepare_urdf(path, what, floating=not fixed)
+    tmp = write_temp(prepared.text)
+    try:
+        body = pb.loadURDF(tmp, list(pose_xyz), quat_from_rpy(*rpy), useFixedBase=fixed, flags=_URDF_FLAGS,
+                           globalScaling=scale, physicsClientId=client)
+    except pb.error as err:
+        raise BackendError(f"{what}: PyBullet cannot load URDF {path}: {err}") from None
+    finally:
+        os.unlink(tmp)
+    return body, prepared.friction, prepared.massless
+
+
+def _link_names(client: int, body: int) -> dict[str, int]:
+    names = {pb.getBodyInfo(body, physicsClientId=client)[0].decode(): BASE}
+    for j in range(pb.getNumJoints(body, physicsClientId=client)):
+        names[pb.getJointInfo(body, j, physicsClientId=client)[12].decode()] = j
+    return names
+
+
+def _friction(client: int, body: int, links: dict[str, int], friction: dict[str, float],
+              default: float) -> None:
+    for name, link in links.items():
+        mu = friction.get(name, default)
+        pb.changeDynamics(body, link, lateralFriction=mu, physicsClientId=client)
+
+
+# ---------------------------------------------------------------------------------------------------- robots
+def _add_robot(client: int, world: World, robot: Robot) -> EntityIndex:
+    what = f"robot '{robot.name}'"
+    path = world.resolve(robot.urdf)
+    try:
+        urdf = read_urdf(path)
+    except UrdfError as e:
+        raise BackendError(f"{what}: {e}") from None
+    body, friction, _ = _load_urdf(client, path, what, robot.pose.xyz, robot.pose.rpy, robot.fixed)
+    links = _link_names(client, body)
+    _friction(client, body, links, friction, _DEFAULT_FRICTION)
+    n = pb.getNumJoints(body, physicsClientId=client)
+    # every joint's default motor off: PyBullet starts each with a velocity motor of force 0.01 (wheels brake)
+    pb.setJointMotorControlArray(body, list(range(n)), pb.VELOCITY_CONTROL, forces=[0.0] * n,
+                                 physicsClientId=client)
+    wheels = {robot.drive.left, robot.drive.right} if robot.drive is not None else set()
+    joints: dict[str, JointIndex] = {}
+    dt = world.timestep
+    for j in urdf.movable_joints:
+        index = links[j.child]
+        if j.name in wheels and robot.drive is not None:
+            joints[j.name] = JointIndex(index, True, robot.drive.max_torque)
+        else:
+            g = robot.gains
+            effort = float(pb.getJointInfo(body, index, physicsClientId=client)[10])
+            torque = min(g.max_torque, effort) if effort > 0 else g.max_torque
+            gain = min(g.kp / g.kv, 1.0 / dt) if g.kv > 0 else 1.0 / dt  # [1/s]: target speed per error
+            joints[j.name] = JointIndex(index, False, torque, gain, g.kp, g.kv)
+    parts = [urdf.root] + [link for link in urdf.links if link != urdf.root]
+    part_link = {part: links[part] for part in parts}
+    part_link[MAIN] = BASE
+    return EntityIndex(robot.name, "robot", body, parts, part_link, [BASE] + list(range(n)), robot.fixed, joints)
+
+
+# -------------------------------------------------------------------------------------------- objects, humans
+def _add_urdf_object(client: int, world: World, obj: Object) -> EntityIndex:
+    assert obj.urdf is not None
+    what = f"object '{obj.name}'"
+    body, friction, _ = _load_urdf(client, world.resolve(obj.urdf), what, obj.pose.xyz, obj.pose.rpy,
+                                   obj.static, obj.scale)
+    links = _link_names(client, body)
+    _friction(client, body, links, friction, obj.friction)
+    n = pb.getNumJoints(body, physicsClientId=client)
+    if n:
+        pb.setJointMotorControlArray(body, list(range(n)), pb.VELOCITY_CONTROL, forces=[0.0] * n,
+                                     physicsClientId=client)
+    return EntityIndex(obj.name, "object", body, [MAIN], {MAIN: BASE}, [BASE] + list(range(n)), obj.static)
+
+
+def _add_shape_object(client: int, world: World, obj: Object) -> EntityIndex:
+    if obj.mesh is not None:
+        path = world.resolve(obj.mesh)
+        if not path.is_file():
+            raise BackendError(f"object '{obj.name}': mesh file {path} not found")
+        try:
+            shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=str(path.resolve()), meshScale=[obj.scale] * 3,
+                                            physicsClientId=client)
+        except pb.error as err:
+            raise BackendError(f"object '{obj.name}': PyBullet cannot read mesh {path}: {err} "
+                               "(PyBullet reads .obj and .stl meshes)") from None
+    else:
+        assert obj.shape is not None and obj.size is not None
+        shape = _primitive(client, obj.shape, obj.size)
+    body = pb.createMultiBody(0.0 if obj.static else obj.mass, shape, basePosition=list(obj.pose.xyz),
+                              baseOrientation=quat_from_rpy(*obj.pose.rpy), physicsClientId=client)
+    pb.changeDynamics(body, BASE, lateralFriction=obj.friction, physicsClientId=client)
+    e = EntityIndex(obj.name, "object", body, [MAIN], {MAIN: BASE}, [BASE], obj.static)
+    if obj.static:  # report the world's mass, as the MuJoCo backend does, though PyBullet holds it with mass 0
+        e.masses0.append(obj.mass)
+        info = pb.getDynamicsInfo(body, BASE, physicsClientId=client)
+        e.inertia0.append(tuple(info[2]))
+    return e
+
+
+def _primitive(client: int, shape: str, size: tuple[float, ...]) -> int:
+    """A collision shape from a world primitive (box full lengths -> half extents; lengths are full lengths)."""
+    if shape == "box":
+        return int(pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[s / 2 for s in size], physicsClientId=client))
+    if shape == "sphere":
+        return int(pb.createCollisionShape(pb.GEOM_SPHERE, radius=size[0], physicsClientId=client))
+    kind = pb.GEOM_CYLINDER if shape == "cylinder" else pb.GEOM_CAPSULE
+    return int(pb.createCollisionShape(kind, radius=size[0], height=size[1], physicsClientId=client))
+
+
+def human_dimensions(height: float) -> tuple[float, float, float]:
+    """``(body radius, head radius, top of the body capsule)`` [m] of a standing person ``height`` [m] tall
+    (the MuJoCo backend's figures: the capsule stands on the feet, the head reaches ``height``)."""
+    body, head = 0.09 * height, 0.065 * height
+    return body, head, height - 2 * head
+
+
+def _add_human(client: int, human: Human) -> EntityIndex:
+    r_body, r_head, top = human_dimensions(human.height)
+    capsule_z, head_z = top / 2, top + r_head
+    com_z = 0.92 * capsule_z + 0.08 * head_z
+    shape = pb.createCollisionShapeArray(
+        [pb.GEOM_CAPSULE, pb.GEOM_SPHERE], radii=[r_body, r_head], lengths=[top - 2 * r_body, 0.0],
+        collisionFramePositions=[[0, 0, capsule_z - com_z], [0, 0, head_z - com_z]], physicsClientId=client)
+    pos = list(human.pose.xyz)
+    orn = quat_from_rpy(*human.pose.rpy)
+    com, _ = pb.multiplyTransforms(pos, orn, [0, 0, com_z], [0, 0, 0, 1])
+    body = pb.createMultiBody(human.mass, shape, basePosition=com, baseOrientation=orn, physicsClientId=client)
+    pb.changeDynamics(body, BASE, lateralFriction=_DEFAULT_FRICTION, physicsClientId=client)
+    e = EntityIndex(human.name, "human", body, [MAIN], {MAIN: BASE}, [BASE], False, held0=human.static)
+    e.local_pos = (0.0, 0.0, com_z)  # the frame at the feet, below the centre of mass
+    return e

@@ -1,0 +1,139 @@
+"""URDF files prepared for ``pybullet.loadURDF``: meshes resolved, visuals dropped, massless links made so.
+
+* ``<visual>`` elements are removed (physics needs collision geometry; visual meshes are often ``.dae``).
+* Collision ``<mesh filename>`` paths are made absolute, with the MuJoCo backend's rules (relative to the
+  URDF's directory; ``package://pkg/rel`` looked up in the URDF's directory and its parents).
+* A link without ``<inertial>`` gets an explicit zero mass: PyBullet would otherwise give it 1 kg and a unit
+  inertia (``BulletUrdfImporter``). As in the MuJoCo backend, a link on a movable joint must have an
+  ``<inertial>``: the masses are the URDF's, nothing is inferred from geometry.
+* Link friction from ``<gazebo reference="link"><mu1>`` (or ``<mu>``), else ``<contact><lateral_friction>``,
+  is returned per link; it is applied with ``changeDynamics`` after loading.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from lxml import etree
+
+from sigcore.backend import BackendError
+
+_SEARCH_DEPTH = 4
+_ZERO_INERTIAL = ('<inertial><origin xyz="0 0 0"/><mass value="0"/>'
+                  '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>')
+
+
+@dataclass(frozen=True)
+class PreparedUrdf:
+    """A URDF rewritten for PyBullet.
+
+    Attributes:
+        text: The rewritten URDF (load it from a temporary file with :func:`write_temp`).
+        root: Name of the root link.
+        friction: Sliding friction per link name, from ``<gazebo>`` or ``<contact>`` tags.
+        massless: Links that had no ``<inertial>``.
+    """
+
+    text: str
+    root: str
+    friction: dict[str, float]
+    massless: frozenset[str]
+
+
+def prepare_urdf(path: Path, what: str, floating: bool) -> PreparedUrdf:
+    """Read and rewrite the URDF at ``path``.
+
+    Args:
+        path: The URDF file.
+        what: The entity it belongs to, for messages, e.g. ``"robot 'robot_000'"``.
+        floating: The root link moves freely (then it needs an ``<inertial>`` too).
+
+    Raises:
+        BackendError: unreadable file, missing collision mesh, a root link called ``world``, or a moving link
+            without ``<inertial>``.
+    """
+    try:
+        root = etree.parse(str(path), etree.XMLParser(remove_comments=True, resolve_entities=False)).getroot()
+    except (OSError, etree.XMLSyntaxError) as e:
+        raise BackendError(f"{what}: cannot read URDF {path}: {e}") from None
+    for visual in list(root.iter("visual")):
+        visual.getparent().remove(visual)
+    for mesh in root.iter("mesh"):
+        filename = str(mesh.get("filename", ""))
+        resolved = _resolve_mesh(filename, path.parent)
+        if resolved is None:
+            link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
+            raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
+                               f"(relative paths are relative to the URDF's directory {path.parent})")
+        mesh.set("filename", str(resolved))
+    links = [str(e.get("name")) for e in root.findall("link")]
+    if not links:
+        raise BackendError(f"{what}: URDF {path} has no <link>")
+    children = {str(c.get("link")) for c in root.iter("child")}
+    roots = [link for link in links if link not in children]
+    if roots == ["world"]:
+        raise BackendError(f"{what}: the root link of {path} is 'world'; remove the 'world' link and its "
+                           "joint, and set fixed=\"true\" on the <robot> to weld the robot to the world")
+    moving = {str(j.find("child").get("link")) for j in root.findall("joint")
+              if j.get("type") != "fixed" and j.find("child") is not None}
+    if floating and roots:
+        moving.add(roots[0])
+    massless: set[str] = set()
+    for link in root.findall("link"):
+        name = str(link.get("name"))
+        if link.find("inertial") is None:
+            if name in moving:
+                raise BackendError(f"{what}: link '{name}' in {path} has no <inertial> (every link on a movable "
+                                   "joint, and the root link of a robot that is not fixed, needs an <inertial> "
+                                   "with positive mass and inertia; masses come only from <inertial>)")
+            link.insert(0, etree.fromstring(_ZERO_INERTIAL))
+            massless.add(name)
+    return PreparedUrdf(etree.tostring(root, encoding="unicode"), roots[0] if roots else links[0],
+                        _link_friction(root), frozenset(massless))
+
+
+def write_temp(text: str) -> str:
+    """Write ``text`` to a new temporary ``.urdf`` file and return its path (the caller deletes it)."""
+    fd, name = tempfile.mkstemp(suffix=".urdf", prefix="sigcore_bullet_")
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    return name
+
+
+def _resolve_mesh(filename: str, urdf_dir: Path) -> Path | None:
+    if filename.startswith("file://"):
+        candidates = [Path(filename[len("file://"):])]
+    elif filename.startswith("package://"):
+        package, _, rel = filename[len("package://"):].partition("/")
+        bases = [urdf_dir, *urdf_dir.parents][:_SEARCH_DEPTH + 1]
+        candidates = []
+        for base in bases:
+            if base.name == package:
+                candidates.append(base / rel)
+            candidates += [base / package / rel, base / rel]
+    else:
+        candidates = [Path(filename) if Path(filename).is_absolute() else urdf_dir / filename]
+    return next((c.resolve() for c in candidates if c.is_file()), None)
+
+
+def _link_friction(root: etree._Element) -> dict[str, float]:
+    friction: dict[str, float] = {}
+    for link in root.findall("link"):
+        lateral = link.find("contact/lateral_friction")
+        if lateral is not None:
+            _put(friction, link.get("name"), lateral.get("value"))
+    for gazebo in root.findall("gazebo"):
+        _put(friction, gazebo.get("reference"), gazebo.findtext("mu1") or gazebo.findtext("mu"))
+    return friction
+
+
+def _put(friction: dict[str, float], link: str | None, value: str | None) -> None:
+    if link is None or value is None:
+        return
+    try:
+        friction[str(link)] = max(0.0, float(value))
+    except ValueError:
+        return
