@@ -1,0 +1,71 @@
+"""Errors of the IK feature. Each carries its data and says what would be valid.
+
+They subclass :class:`sigcore.agent.exceptions.ApiError`, so a service handler that raises one answers with
+``success = false`` and the message.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from sigcore.agent.exceptions import ApiError
+
+
+class IkError(ApiError):
+    """Base of the IK feature's errors."""
+
+
+class UnknownChainError(IkError):
+    """No kinematic chain (arm) of that name on the robot.
+
+    Attributes:
+        robot: Robot name.
+        chain: The requested name.
+        valid: Names that would have been accepted.
+    """
+
+    def __init__(self, robot: str, chain: str, valid: Iterable[str]) -> None:
+        self.robot, self.chain, self.valid = robot, chain, tuple(valid)
+        super().__init__(f"robot '{robot}' has no arm '{chain}'; valid: {', '.join(self.valid) or 'none'}")
+
+
+class UnknownFrameError(IkError):
+    """A target frame that is neither ``world`` nor a link of the robot.
+
+    Attributes:
+        frame: The requested frame.
+        valid: ``world`` and the robot's link names.
+    """
+
+    def __init__(self, frame: str, valid: Iterable[str]) -> None:
+        self.frame, self.valid = frame, tuple(valid)
+        super().__init__(f"unknown frame '{frame}'; valid: {', '.join(self.valid)}")
+
+
+class InvalidTargetError(IkError):
+    """A target with a non-finite number, a zero quaternion or a bad tolerance or timeout."""
+
+
+class UnreachableError(IkError):
+    """The solver found no configuration within the tolerance (the target is out of reach or out of the limits).
+
+    Attributes:
+        position_error: Residual distance of the best configuration found [m].
+        rotation_error: Residual rotation angle of the best configuration [rad] (0 for position-only targets).
+        joint_positions: That best configuration, chain joints in order [rad] or [m].
+    """
+
+    def __init__(self, chain: str, position_error: float, rotation_error: float, tolerance: float,
+                 joint_positions: Iterable[float], position_only: bool) -> None:
+        self.position_error, self.rotation_error = position_error, rotation_error
+        self.joint_positions = tuple(joint_positions)
+        rot = "" if position_only else f", rotation residual {rotation_error:.3g} rad"
+        super().__init__(
+            f"target unreachable for arm '{chain}' within the joint limits: residual {position_error:.4g} m"
+            f"{rot} (tolerance {tolerance:g} m); closest joint positions "
+            f"[{', '.join(f'{a:.4f}' for a in self.joint_positions)}]"
+        )
+
+
+class MoveError(IkError):
+    """The arm did not settle at the solution in time (blocked, overloaded, or superseded by a newer request)."""
