@@ -52,9 +52,9 @@ class SolverSettings:
     max_attempts: int = 30
     damping: float = 1e-6
     damping_gain: float = 0.05
-    stall_iterations: int = 4
+    stall_iterations: int = 3
     rotation_weight: float = 0.3
-    seed_candidates: int = 8
+    seed_candidates: int = 4
     seed_first: bool = False
     max_step: float = 1.0
     seed: int = 0
