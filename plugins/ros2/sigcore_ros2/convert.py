@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Time
+from geometry_msgs.msg import TransformStamped
 from pydantic import BaseModel
 
 from sigcore.api.table import ApiEntry
@@ -72,3 +73,13 @@ def ranges_array(ranges: np.ndarray) -> array.array:
     out = array.array("f")
     out.frombytes(np.ascontiguousarray(ranges, dtype=np.float32).tobytes())
     return out
+
+
+def transform(parent: str, child: str, t: Time, xyz: Any, wxyz: Any) -> TransformStamped:
+    """A ``TransformStamped`` ``parent -> child`` at time ``t``: translation [m], rotation (w, x, y, z)."""
+    tf = TransformStamped()
+    tf.header.stamp, tf.header.frame_id, tf.child_frame_id = t, parent, child
+    tr, rot = tf.transform.translation, tf.transform.rotation
+    tr.x, tr.y, tr.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
+    rot.w, rot.x, rot.y, rot.z = float(wxyz[0]), float(wxyz[1]), float(wxyz[2]), float(wxyz[3])
+    return tf

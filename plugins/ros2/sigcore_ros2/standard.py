@@ -12,7 +12,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from geometry_msgs.msg import TransformStamped, Twist
+from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState, LaserScan
@@ -23,8 +23,9 @@ from sigcore.agent.robot import RobotObj
 from sigcore.geometry import quat_conj, quat_mul, quat_rotate
 from sigcore.sim.lidar import Scan
 
-from .convert import ranges_array, stamp
+from .convert import ranges_array, stamp, transform
 from .qos import Qos
+from .slam_topics import SlamTopics
 
 if TYPE_CHECKING:
     from builtin_interfaces.msg import Time
@@ -39,13 +40,6 @@ if TYPE_CHECKING:
 log = logging.getLogger("sigcore.ros2")
 
 
-def _transform(parent: str, child: str, t: Time, xyz: Any, wxyz: Any) -> TransformStamped:
-    tf = TransformStamped()
-    tf.header.stamp, tf.header.frame_id, tf.child_frame_id = t, parent, child
-    tr, rot = tf.transform.translation, tf.transform.rotation
-    tr.x, tr.y, tr.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
-    rot.w, rot.x, rot.y, rot.z = float(wxyz[0]), float(wxyz[1]), float(wxyz[2]), float(wxyz[3])
-    return tf
 
 
 class StandardEndpoints:
@@ -102,15 +96,22 @@ class StandardEndpoints:
             self.topics[topic] = "sensor_msgs/msg/LaserScan"
         self._warned: set[str] = set()
         sim.scan_observers.append(self._scan)
+        self.slam: SlamTopics | None = None
+        if "slam" in sim.features:
+            robot = sim.features["slam"].robot  # type: ignore[attr-defined]
+            self.slam = SlamTopics(sim, node, qos, self.tf_pub, self.prefix[robot])
+            self.topics.update(self.slam.topics)
 
     # ------------------------------------------------------------------ frames
     def static_transforms(self) -> TFMessage:
-        """world -> odom per robot with a drive, and every fixed joint of each robot's URDF."""
+        """world -> odom per robot with a drive (world -> map for the robot SLAM maps: map -> odom then comes from
+        SLAM on /tf), and every fixed joint of each robot's URDF."""
         sim, t = self.sim, stamp(self.sim.step_count, self.dt_ns)
         out = []
         for name, odo in sim.odometry.items():
             x, y, yaw = odo.origin
-            out.append(_transform("world", self.prefix[name] + "odom", t, (x, y, 0.0),
+            child = "map" if self.slam is not None and self.slam.robot == name else "odom"
+            out.append(transform("world", self.prefix[name] + child, t, (x, y, 0.0),
                                   (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))))
         for name, prefix in self.prefix.items():
             for joint in sim.urdf(name).joints:
@@ -122,7 +123,7 @@ class StandardEndpoints:
                 except Exception:  # a link the backend merged away
                     continue
                 inv = quat_conj(pq)
-                out.append(_transform(prefix + joint.parent, prefix + joint.child, t,
+                out.append(transform(prefix + joint.parent, prefix + joint.child, t,
                                       quat_rotate(inv, np.asarray(cp) - np.asarray(pp)), quat_mul(inv, cq)))
         return TFMessage(transforms=out)
 
@@ -155,6 +156,8 @@ class StandardEndpoints:
             self.clock_pub.publish(self._clock)
         if n % self.state_every == 0:
             self.publish_state()
+        if self.slam is not None:
+            self.slam.on_step(sim)
 
     def publish_clock(self) -> None:
         """Publish the current time now (e.g. at start and after a reset)."""
@@ -169,7 +172,7 @@ class StandardEndpoints:
             s = odo.state
             q = (math.cos(s.yaw / 2), 0.0, 0.0, math.sin(s.yaw / 2))
             odom_frame = self.prefix[name] + "odom"
-            transforms.append(_transform(odom_frame, self.base[name], t, (s.x, s.y, 0.0), q))
+            transforms.append(transform(odom_frame, self.base[name], t, (s.x, s.y, 0.0), q))
             msg = Odometry()
             msg.header.stamp, msg.header.frame_id, msg.child_frame_id = t, odom_frame, self.base[name]
             p = msg.pose.pose
