@@ -2,24 +2,10 @@
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 from mujoco_worlds import robot, run
 
-from sigcore.backend import BackendError
-
 BOX = '<object name="o" shape="box" size="0.2 0.2 0.2" mass="1" pose="0 0 1"/>'
-
-
-def test_gravity_off_floats(make_world, build) -> None:
-    """With gravity off an object stays where it is; with gravity back on it falls again."""
-    b = build(make_world(BOX))
-    b.set_gravity_mode("o", False)
-    run(b, 1.0)
-    np.testing.assert_allclose(b.get_pose("o")[0], [0, 0, 1], atol=1e-12)
-    b.set_gravity_mode("o", True)
-    run(b, 0.2)
-    assert b.get_pose("o")[0][2] < 1.0 - 0.15
 
 
 def test_gravity_off_robot_arm_does_not_sag(make_world, build) -> None:
@@ -30,97 +16,3 @@ def test_gravity_off_robot_arm_does_not_sag(make_world, build) -> None:
     b.set_joint_target("bot", "shoulder", 1.0)
     run(b, 2.0)
     assert b.get_joint_angle("bot", "shoulder") == pytest.approx(1.0, abs=1e-6)
-
-
-def test_dynamics_off_holds(make_world, build) -> None:
-    """With dynamics off an object is held exactly despite gravity and an applied force; set_pose still moves
-    it."""
-    b = build(make_world(BOX))
-    b.set_dynamics_mode("o", False)
-    for _ in range(200):
-        b.apply_wrench("o", None, np.array([50.0, 0, 0]), np.zeros(3))
-        b.step()
-    np.testing.assert_allclose(b.get_pose("o")[0], [0, 0, 1])
-    np.testing.assert_allclose(b.get_velocity("o")[0], 0.0)
-    b.set_pose("o", np.array([1.0, 1.0, 2.0]))
-    run(b, 0.5)
-    np.testing.assert_allclose(b.get_pose("o")[0], [1, 1, 2])
-    b.set_dynamics_mode("o", True)
-    run(b, 0.2)
-    assert b.get_pose("o")[0][2] < 2.0 - 0.15
-
-
-def test_dynamics_off_robot_moves_by_joint_angle_only(make_world, build) -> None:
-    """A held robot ignores its servos and wheel commands but takes set_joint_angle instantly and keeps it."""
-    b = build(make_world(robot()))
-    b.set_dynamics_mode("bot", False)
-    b.set_joint_velocity("bot", "wheel_l_joint", 5.0)
-    b.set_joint_target("bot", "shoulder", 1.0)
-    b.set_joint_angle("bot", "elbow", 0.7)
-    run(b, 0.5)
-    np.testing.assert_allclose(b.get_pose("bot")[0], [0, 0, 0])
-    assert b.get_joint_angle("bot", "shoulder") == 0.0
-    assert b.get_joint_angle("bot", "elbow") == 0.7
-
-
-def test_static_human_held_until_dynamics_on(make_world, build) -> None:
-    """A static human stands still under a push; with dynamics on the same push moves it."""
-    b = build(make_world('<human name="h" pose="0 0 0"/>'))
-    for _ in range(100):
-        b.apply_wrench("h", None, np.array([1000.0, 0, 0]), np.zeros(3))
-        b.step()
-    np.testing.assert_allclose(b.get_pose("h")[0], [0, 0, 0])
-    np.testing.assert_allclose(b.get_pose("h")[1], [1, 0, 0, 0])
-    b.set_dynamics_mode("h", True)
-    for _ in range(100):
-        b.apply_wrench("h", None, np.array([1000.0, 0, 0]), np.zeros(3))
-        b.step()
-    assert b.get_com("h")[0] > 0.05  # it topples or slides
-
-
-def test_collision_off_falls_through(make_world, build) -> None:
-    """With collision off a box falls through the ground; turned back on, another box still lands on the
-    ground."""
-    b = build(make_world(BOX + '<object name="p" shape="box" size="0.2 0.2 0.2" pose="2 0 0.5"/>'))
-    b.set_collision_mode("o", False)
-    run(b, 1.0)
-    assert b.get_pose("o")[0][2] < -1.0
-    b.set_collision_mode("o", True)
-    run(b, 1.0)
-    assert b.get_pose("p")[0][2] == pytest.approx(0.1, abs=2e-3)
-
-
-def test_static_object_cannot_become_dynamic(make_world, build) -> None:
-    """Enabling dynamics of a static object is refused with a BackendError; disabling it is accepted."""
-    b = build(make_world('<object name="w" shape="box" size="1 1 1" static="true" pose="0 0 0.5"/>'))
-    b.set_dynamics_mode("w", False)
-    with pytest.raises(BackendError, match="static"):
-        b.set_dynamics_mode("w", True)
-
-
-def test_reset_restores_everything(make_world, build) -> None:
-    """reset restores poses, joint angles, masses and gravity/dynamics/collision modes, and releases
-    grasps."""
-    world = make_world(robot() + BOX + '<object name="c" shape="sphere" size="0.03" graspable="true" '
-                                       'pose="-0.1 0 0.78"/>'
-                       '<object name="w" shape="box" size="1 1 1" static="true" pose="3 0 0.5"/>')
-    b = build(world)
-    qpos0 = b.data.qpos.copy()
-    b.attach("bot", "hand", "c")
-    b.set_mass("o", 5.0)
-    b.set_gravity_mode("o", False)
-    b.set_collision_mode("bot", False)
-    b.set_dynamics_mode("c", False)
-    b.set_pose("w", np.array([4.0, 0, 0.5]))
-    b.set_joint_velocity("bot", "wheel_l_joint", 4.0)
-    b.set_joint_target("bot", "shoulder", 1.0)
-    run(b, 0.5)
-    b.reset()
-    np.testing.assert_array_equal(b.data.qpos, qpos0)
-    np.testing.assert_allclose(b.get_pose("w")[0], [3, 0, 0.5])
-    assert b.get_mass("o") == pytest.approx(1.0)
-    assert not b.data.eq_active.any()
-    fresh = build(world)
-    run(b, 0.5)
-    run(fresh, 0.5)
-    np.testing.assert_allclose(b.data.qpos, fresh.data.qpos, atol=1e-12)  # same behaviour as a fresh build
