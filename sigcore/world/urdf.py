@@ -116,3 +116,48 @@ def read_urdf(path: Path) -> UrdfModel:
         raise UrdfError(path, root.sourceline or 0, f"expected one root link, found {roots}")
     meshes = tuple(str(m.get("filename")) for m in root.iter("mesh"))
     return UrdfModel(str(root.get("name", path.stem)), links, tuple(joints), roots[0], meshes)
+
+
+MESH_SEARCH_DEPTH = 4
+"""How many parent directories of a URDF are searched for ``package://`` meshes."""
+
+
+def resolve_mesh(filename: str, urdf_dir: Path) -> Path | None:
+    """The file a URDF ``<mesh filename>`` names: relative to the URDF's directory, ``file://`` or
+    ``package://<pkg>/...`` (searched in the URDF's directory and up to :data:`MESH_SEARCH_DEPTH` parents);
+    ``None`` if there is no such file."""
+    if filename.startswith("file://"):
+        candidates = [Path(filename[len("file://"):])]
+    elif filename.startswith("package://"):
+        package, _, rel = filename[len("package://"):].partition("/")
+        bases = [urdf_dir, *urdf_dir.parents][:MESH_SEARCH_DEPTH + 1]
+        candidates = []
+        for base in bases:
+            if base.name == package:
+                candidates.append(base / rel)
+            candidates += [base / package / rel, base / rel]
+    else:
+        candidates = [Path(filename) if Path(filename).is_absolute() else urdf_dir / filename]
+    return next((c.resolve() for c in candidates if c.is_file()), None)
+
+
+def link_friction(root: etree._Element) -> dict[str, float]:
+    """Sliding friction per link of a parsed URDF: ``<gazebo reference><mu1>`` (or ``<mu>``), else PyBullet's
+    ``<link><contact><lateral_friction value>``; negative values count as 0, unreadable ones are ignored."""
+    friction: dict[str, float] = {}
+    for link in root.findall("link"):
+        lateral = link.find("contact/lateral_friction")
+        if lateral is not None:
+            _put_friction(friction, link.get("name"), lateral.get("value"))
+    for gazebo in root.findall("gazebo"):
+        _put_friction(friction, gazebo.get("reference"), gazebo.findtext("mu1") or gazebo.findtext("mu"))
+    return friction
+
+
+def _put_friction(friction: dict[str, float], link: str | None, value: str | None) -> None:
+    if link is None or value is None:
+        return
+    try:
+        friction[str(link)] = max(0.0, float(value))
+    except ValueError:
+        return

@@ -20,8 +20,8 @@ from pathlib import Path
 from lxml import etree
 
 from sigcore.backend import BackendError
+from sigcore.world.urdf import link_friction, resolve_mesh
 
-_SEARCH_DEPTH = 4
 _ZERO_INERTIAL = ('<inertial><origin xyz="0 0 0"/><mass value="0"/>'
                   '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>')
 
@@ -63,7 +63,7 @@ def prepare_urdf(path: Path, what: str, floating: bool) -> PreparedUrdf:
         visual.getparent().remove(visual)
     for mesh in root.iter("mesh"):
         filename = str(mesh.get("filename", ""))
-        resolved = _resolve_mesh(filename, path.parent)
+        resolved = resolve_mesh(filename, path.parent)
         if resolved is None:
             link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
             raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
@@ -92,7 +92,7 @@ def prepare_urdf(path: Path, what: str, floating: bool) -> PreparedUrdf:
             link.insert(0, etree.fromstring(_ZERO_INERTIAL))
             massless.add(name)
     return PreparedUrdf(etree.tostring(root, encoding="unicode"), roots[0] if roots else links[0],
-                        _link_friction(root), frozenset(massless))
+                        link_friction(root), frozenset(massless))
 
 
 def write_temp(text: str) -> str:
@@ -101,39 +101,3 @@ def write_temp(text: str) -> str:
     with os.fdopen(fd, "w") as f:
         f.write(text)
     return name
-
-
-def _resolve_mesh(filename: str, urdf_dir: Path) -> Path | None:
-    if filename.startswith("file://"):
-        candidates = [Path(filename[len("file://"):])]
-    elif filename.startswith("package://"):
-        package, _, rel = filename[len("package://"):].partition("/")
-        bases = [urdf_dir, *urdf_dir.parents][:_SEARCH_DEPTH + 1]
-        candidates = []
-        for base in bases:
-            if base.name == package:
-                candidates.append(base / rel)
-            candidates += [base / package / rel, base / rel]
-    else:
-        candidates = [Path(filename) if Path(filename).is_absolute() else urdf_dir / filename]
-    return next((c.resolve() for c in candidates if c.is_file()), None)
-
-
-def _link_friction(root: etree._Element) -> dict[str, float]:
-    friction: dict[str, float] = {}
-    for link in root.findall("link"):
-        lateral = link.find("contact/lateral_friction")
-        if lateral is not None:
-            _put(friction, link.get("name"), lateral.get("value"))
-    for gazebo in root.findall("gazebo"):
-        _put(friction, gazebo.get("reference"), gazebo.findtext("mu1") or gazebo.findtext("mu"))
-    return friction
-
-
-def _put(friction: dict[str, float], link: str | None, value: str | None) -> None:
-    if link is None or value is None:
-        return
-    try:
-        friction[str(link)] = max(0.0, float(value))
-    except ValueError:
-        return

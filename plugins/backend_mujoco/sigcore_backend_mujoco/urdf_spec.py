@@ -25,9 +25,7 @@ import mujoco
 from lxml import etree
 
 from sigcore.backend import BackendError
-
-_SEARCH_DEPTH = 4
-"""How many parent directories of the URDF are searched for ``package://`` meshes."""
+from sigcore.world.urdf import link_friction, resolve_mesh
 
 
 @dataclass(frozen=True)
@@ -64,13 +62,13 @@ def load_urdf(path: Path, what: str) -> LoadedUrdf:
         visual.getparent().remove(visual)
     for mesh in root.iter("mesh"):
         filename = str(mesh.get("filename", ""))
-        resolved = _resolve_mesh(filename, path.parent)
+        resolved = resolve_mesh(filename, path.parent)
         if resolved is None:
             link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
             raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
                                f"(relative paths are relative to the URDF's directory {path.parent})")
         mesh.set("filename", str(resolved))
-    friction = _link_friction(root)
+    friction = link_friction(root)
     links = [str(e.get("name")) for e in root.findall("link")]
     children = {str(c.get("link")) for c in root.iter("child")}
     roots = [link for link in links if link not in children]
@@ -90,42 +88,10 @@ def load_urdf(path: Path, what: str) -> LoadedUrdf:
     return LoadedUrdf(spec, str(first.name), friction)
 
 
-def _resolve_mesh(filename: str, urdf_dir: Path) -> Path | None:
-    if filename.startswith("file://"):
-        candidates = [Path(filename[len("file://"):])]
-    elif filename.startswith("package://"):
-        package, _, rel = filename[len("package://"):].partition("/")
-        bases = [urdf_dir, *urdf_dir.parents][:_SEARCH_DEPTH + 1]
-        candidates = []
-        for base in bases:
-            if base.name == package:
-                candidates.append(base / rel)
-            candidates += [base / package / rel, base / rel]
-    else:
-        candidates = [Path(filename) if Path(filename).is_absolute() else urdf_dir / filename]
-    return next((c.resolve() for c in candidates if c.is_file()), None)
 
 
-def _link_friction(root: etree._Element) -> dict[str, float]:
-    """Sliding friction per link: ``<gazebo reference><mu1>`` (or ``<mu>``), else PyBullet's
-    ``<link><contact><lateral_friction value>``."""
-    friction: dict[str, float] = {}
-    for link in root.findall("link"):
-        lateral = link.find("contact/lateral_friction")
-        if lateral is not None:
-            _put(friction, link.get("name"), lateral.get("value"))
-    for gazebo in root.findall("gazebo"):
-        _put(friction, gazebo.get("reference"), gazebo.findtext("mu1") or gazebo.findtext("mu"))
-    return friction
 
 
-def _put(friction: dict[str, float], link: str | None, value: str | None) -> None:
-    if link is None or value is None:
-        return
-    try:
-        friction[str(link)] = max(0.0, float(value))
-    except ValueError:
-        return
 
 
 def _first_line(error: Exception) -> str:
