@@ -74,6 +74,8 @@ for topic, cls, fields in (
     c.publish(msg.EntityVector, "/ball_setVelocity", name="", x=0.0, y=0.0, z=0.0)
     c.publish(msg.EntityVector, "/ball_setAngularVelocity", name="", x=0.0, y=0.0, z=0.0)
     c.publish(msg.EntityVector, "/ball_setPosition", name="", x=-1.0, y=1.0, z=1.0)
+    # the earlier spin left the ball at a yaw that depends on timing; a body-frame force must point along world x
+    c.publish(msg.EntityQuaternion, "/ball_setRotation", name="", qw=1.0, qx=0.0, qy=0.0, qz=0.0)
     settle(0.15)
     c.publish(cls, f"/ball{topic}", name="", **fields)
     settle(0.15)
