@@ -156,6 +156,11 @@ class BulletBackend(Backend):
     def _position_servo(self, e: EntityIndex, j: JointIndex, angle: float) -> None:
         self._servos[e.name].hold(j.index, angle)  # the motor is set before each step (see servo.py)
 
+    def _wake(self) -> None:
+        """Something may push an arm: every servo bank updates its motors again (see servo.py)."""
+        for bank in self._servos.values():
+            bank.wake()
+
     def step(self) -> None:
         """Advance by one timestep (``stepSimulation``), compensating gravity and restoring held entities."""
         if self._nograv:
@@ -266,6 +271,7 @@ class BulletBackend(Backend):
 
     def set_pose(self, entity: str, position: Array | None = None, quaternion: Array | None = None) -> None:
         """Teleport the base so that its URDF frame has this pose (``resetBasePositionAndOrientation``)."""
+        self._wake()
         e = self._entity(entity)
         pos, orn = self._frame(e, BASE)
         new_pos = [float(x) for x in position] if position is not None else list(pos)
@@ -295,6 +301,7 @@ class BulletBackend(Backend):
 
     def set_velocity(self, entity: str, linear: Array | None = None, angular: Array | None = None) -> None:
         """Set the base's velocity (``resetBaseVelocity`` at its centre of mass); no effect if welded."""
+        self._wake()
         e = self._entity(entity)
         if e.welded:
             return
@@ -322,6 +329,7 @@ class BulletBackend(Backend):
 
     def apply_wrench(self, entity: str, part: str | None, force: Array, torque: Array) -> None:
         """``applyExternalForce`` at the link's centre of mass and ``applyExternalTorque``, world frame."""
+        self._wake()
         e = self._entity(entity)
         link = e.link(part)
         c = self.client
@@ -338,6 +346,7 @@ class BulletBackend(Backend):
 
     def set_mass(self, entity: str, mass: float) -> None:
         """Scale every link's mass and inertia so that they total ``mass`` [kg] (``changeDynamics``)."""
+        self._wake()
         e = self._entity(entity)
         masses = self._mass[entity]
         total = sum(masses)
@@ -353,6 +362,7 @@ class BulletBackend(Backend):
 
     def set_gravity_mode(self, entity: str, enabled: bool) -> None:
         """Gravity off: a force ``-m g`` at every link's centre of mass before each step."""
+        self._wake()
         e = self._entity(entity)
         if enabled:
             self._nograv.discard(e.name)
@@ -365,6 +375,7 @@ class BulletBackend(Backend):
         Raises:
             BackendError: enabling dynamics of a static object (PyBullet holds it with mass 0).
         """
+        self._wake()
         e = self._entity(entity)
         if e.static:
             if enabled:
@@ -380,6 +391,7 @@ class BulletBackend(Backend):
     def set_collision_mode(self, entity: str, enabled: bool) -> None:
         """Collision off puts every link in a filter group that collides with nothing (rays still see it; see the
         table in :mod:`.layout`)."""
+        self._wake()
         e = self._entity(entity)
         if enabled == (e.name not in self._collision_off):
             return
@@ -444,6 +456,7 @@ class BulletBackend(Backend):
 
     def add_joint_torque(self, entity: str, joint: str, torque: float) -> None:
         """``TORQUE_CONTROL`` for the next step (on top of the joint's motor)."""
+        self._wake()
         e = self._entity(entity)
         pb.setJointMotorControl2(e.body, e.joint(joint).index, pb.TORQUE_CONTROL, force=torque,
                                  physicsClientId=self.client)
@@ -460,6 +473,7 @@ class BulletBackend(Backend):
         Raises:
             BackendError: ``part`` is not a gripper of ``entity`` or ``obj`` is not a graspable dynamic object.
         """
+        self._wake()
         robot, target = self._entity(entity), self._entity(obj)
         key = (entity, part, obj)
         if key in self._grasps:
@@ -473,6 +487,7 @@ class BulletBackend(Backend):
 
     def detach(self, entity: str, part: str, obj: str) -> None:
         """Remove the constraint (no effect if not attached)."""
+        self._wake()
         cid = self._grasps.pop((entity, part, obj), None)
         if cid is not None:
             grasp.detach(self.client, cid, self._entity(entity), self._entity(obj))
