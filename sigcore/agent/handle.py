@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..backend import MAIN, Array
-from ..geometry import angle_between, normalized, quat_from_axis_angle, quat_rotate
+from ..geometry import angle_between, cross, normalized, quat_from_axis_angle, quat_rotate
 from .exceptions import ApiError
 
 if TYPE_CHECKING:
@@ -249,7 +249,7 @@ class SimObj:
 
     def _force_at(self, force: Array, point: Array) -> None:
         com = self.sim.backend.get_com(self.name)
-        self.sim.add_wrench(self.name, None, force, np.cross(point - com, force))
+        self.sim.add_wrench(self.name, None, force, cross(point - com, force))
 
     # ------------------------------------------------------------------ properties and modes
     def mass(self) -> float:

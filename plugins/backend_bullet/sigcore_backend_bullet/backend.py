@@ -35,6 +35,7 @@ import numpy.typing as npt
 import pybullet as pb
 
 from sigcore.backend import GROUND, MAIN, Array, Backend, BackendError
+from sigcore.geometry import cross
 from sigcore.world.models import Object, Robot, World
 
 from . import grasp, rays
@@ -296,7 +297,7 @@ class BulletBackend(Backend):
                                 physicsClientId=c)
             com, origin, lin, ang = s[0], s[4], s[6], s[7]
         w = np.array(ang, dtype=np.float64)
-        v = np.array(lin, dtype=np.float64) + np.cross(w, np.subtract(origin, com))
+        v = np.array(lin, dtype=np.float64) + cross(ang, tuple(o - p for o, p in zip(origin, com, strict=True)))
         return v, w
 
     def set_velocity(self, entity: str, linear: Array | None = None, angular: Array | None = None) -> None:
@@ -311,7 +312,7 @@ class BulletBackend(Backend):
         c = self.client
         com = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)[0]
         origin = self._frame(e, BASE)[0]
-        v_com = lin + np.cross(ang, np.subtract(com, origin))
+        v_com = lin + cross(ang, np.subtract(com, origin))
         pb.resetBaseVelocity(e.body, v_com.tolist(), ang.tolist(), physicsClientId=c)
         self._tick += 1
 

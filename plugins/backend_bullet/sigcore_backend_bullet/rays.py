@@ -13,6 +13,9 @@ the robot's arm).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from operator import itemgetter
+
 import numpy as np
 import numpy.typing as npt
 import pybullet as pb
@@ -27,6 +30,8 @@ STEP_THROUGH = 1e-5
 """How far beyond an excluded link's bounding box the next pass starts [m]."""
 _BATCH = 16384
 """``MAX_RAY_INTERSECTION_BATCH_SIZE`` of PyBullet 3.2.7."""
+_BODY, _LINK, _FRACTION = itemgetter(0), itemgetter(1), itemgetter(2)
+"""Fields of a ``rayTestBatch`` result."""
 
 
 def cast(client: int, origin: Array, directions: Array, max_range: float, exclude: int | None,
@@ -51,11 +56,16 @@ def cast(client: int, origin: Array, directions: Array, max_range: float, exclud
     start = np.broadcast_to(np.asarray(origin, dtype=np.float64), (n, 3)).copy()
     travelled = np.zeros(n)
     if exclude is not None and links:
-        o = np.asarray(origin, dtype=np.float64)
-        for index in links:
-            lo, hi = (np.array(v) for v in pb.getAABB(exclude, index, physicsClientId=client))
-            if np.all(lo <= o) and np.all(o <= hi):
-                travelled = np.maximum(travelled, _slab_exit(start, dirs, lo, hi) + STEP_THROUGH)
+        ox, oy, oz = (float(v) for v in origin)
+        boxes = []
+        for index in links:  # plain comparisons: numpy costs about 8 µs a link here, 20 links a scan
+            lo, hi = pb.getAABB(exclude, index, physicsClientId=client)
+            if lo[0] <= ox <= hi[0] and lo[1] <= oy <= hi[1] and lo[2] <= oz <= hi[2]:
+                boxes.append((lo, hi))
+        for box in boxes:  # a box inside another one that holds the origin is left first by every ray
+            if not any(other is not box and _within(box, other) for other in boxes):
+                exit_ = _slab_exit(start, dirs, np.array(box[0]), np.array(box[1])) + STEP_THROUGH
+                travelled = np.maximum(travelled, exit_)
         start += dirs * travelled[:, None]
     todo = np.arange(n)
     for _ in range(MAX_PASSES):
@@ -85,10 +95,17 @@ def cast(client: int, origin: Array, directions: Array, max_range: float, exclud
     return out
 
 
+def _within(inner: tuple[Sequence[float], Sequence[float]], outer: tuple[Sequence[float], Sequence[float]]) -> bool:
+    """Whether the box ``inner`` (lower and upper corner) lies in ``outer``."""
+    return all(a <= b for a, b in zip(outer[0], inner[0], strict=True)) and all(
+        a <= b for a, b in zip(inner[1], outer[1], strict=True))
+
+
 def _slab_exit(starts: Array, dirs: Array, lo: Array, hi: Array) -> Array:
-    """Distance [m] along each ray from its start to where it leaves the box ``lo``..``hi``."""
+    """Distance [m] along each ray from its start (inside the box) to where it leaves the box ``lo``..``hi``."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        far = np.where(dirs > 0, (hi - starts) / dirs, np.where(dirs < 0, (lo - starts) / dirs, np.inf))
+        inv = 1.0 / dirs  # a zero component gives +-inf: that slab is never left
+        far = np.fmax((hi - starts) * inv, (lo - starts) * inv)  # fmax: 0 * inf (a start on a face) is NaN
     return np.min(far, axis=1)
 
 
@@ -97,7 +114,7 @@ def _batch(client: int, starts: Array, ends: Array) -> tuple[npt.NDArray[np.int6
     for i in range(0, starts.shape[0], _BATCH):
         results += pb.rayTestBatch(starts[i:i + _BATCH].tolist(), ends[i:i + _BATCH].tolist(),
                                    collisionFilterMask=RAY_MASK, physicsClientId=client)
-    bodies = np.fromiter((r[0] for r in results), dtype=np.int64, count=len(results))
-    links = np.fromiter((r[1] for r in results), dtype=np.int64, count=len(results))
-    fractions = np.fromiter((r[2] for r in results), dtype=np.float64, count=len(results))
+    bodies = np.array(list(map(_BODY, results)), dtype=np.int64)
+    links = np.array(list(map(_LINK, results)), dtype=np.int64)
+    fractions = np.array(list(map(_FRACTION, results)), dtype=np.float64)
     return bodies, links, fractions
