@@ -121,6 +121,7 @@ class BulletBackend(Backend):
         self._state0 = pb.saveState(physicsClientId=c)
         self._collision_off: set[str] = set()
         self._filters_changed = False
+        self._frozen: set[str] = set()
         self._restart()
 
     def _restart(self) -> None:
@@ -134,7 +135,7 @@ class BulletBackend(Backend):
         self._held: dict[str, tuple[list[float], list[float], list[float]]] = {}
         for e in self._entities.values():
             if e.held0:
-                self._hold(e)
+                self._hold(e, initial=True)
 
     def _restart_motors(self) -> None:
         c = self.client
@@ -177,7 +178,7 @@ class BulletBackend(Backend):
     def _compensate_gravity(self) -> None:
         c = self.client
         for name in self._nograv:
-            if name in self._held:
+            if name in self._held or name in self._frozen:
                 continue
             e = self._entities[name]
             masses = self._mass[name]
@@ -197,8 +198,18 @@ class BulletBackend(Backend):
             for j, q in zip(e.joints.values(), angles, strict=True):
                 pb.resetJointState(e.body, j.index, q, 0.0, physicsClientId=c)
 
-    def _hold(self, e: EntityIndex) -> None:
+    def _hold(self, e: EntityIndex, initial: bool = False) -> None:
+        """Dynamics off: a single-link body becomes static (zero mass: nothing to do per step, as a static object
+        costs); anything else is put back where it is now after every step (see ``_restore_held``)."""
         c = self.client
+        if len(e.links) == 1 and not e.welded:
+            if e.name not in self._frozen:
+                pb.resetBaseVelocity(e.body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)
+                pb.changeDynamics(e.body, BASE, mass=0.0, physicsClientId=c)
+                self._filter(e, e.name not in self._collision_off)  # PyBullet gave it the default static filter
+                self._frozen.add(e.name)
+                self._filters_changed |= not initial  # it was re-inserted in the broadphase: reset rebuilds
+            return
         pos, orn = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)
         angles = [float(pb.getJointState(e.body, j.index, physicsClientId=c)[0]) for j in e.joints.values()]
         self._held[e.name] = (list(pos), list(orn), angles)
@@ -225,7 +236,7 @@ class BulletBackend(Backend):
         for e in self._entities.values():
             masses = self._mass[e.name]
             for i, link in enumerate(e.links):
-                if masses[i] != e.masses0[i] and not e.static:
+                if masses[i] != e.masses0[i] and not e.static and e.name not in self._frozen:
                     pb.changeDynamics(e.body, link, mass=e.masses0[i], localInertiaDiagonal=list(e.inertia0[i]),
                                       physicsClientId=c)
         pb.restoreState(self._state0, physicsClientId=c)
@@ -356,7 +367,7 @@ class BulletBackend(Backend):
         factor = mass / total
         for i, link in enumerate(e.links):
             masses[i] *= factor
-            if not e.static and masses[i] > 0.0:
+            if not e.static and masses[i] > 0.0 and e.name not in self._frozen:  # frozen: mass back when freed
                 inertia = [x * masses[i] / e.masses0[i] for x in e.inertia0[i]]
                 pb.changeDynamics(e.body, link, mass=masses[i], localInertiaDiagonal=inertia,
                                   physicsClientId=self.client)
@@ -385,6 +396,13 @@ class BulletBackend(Backend):
             return
         if enabled:
             self._held.pop(e.name, None)
+            if e.name in self._frozen:
+                self._frozen.discard(e.name)
+                mass, mass0 = self._mass[e.name][0], e.masses0[0]
+                inertia = [x * mass / mass0 for x in e.inertia0[0]] if mass0 > 0.0 else list(e.inertia0[0])
+                pb.changeDynamics(e.body, BASE, mass=mass, localInertiaDiagonal=inertia, physicsClientId=self.client)
+                self._filter(e, e.name not in self._collision_off)
+                self._filters_changed = True
         else:
             self._hold(e)
             self._tick += 1
