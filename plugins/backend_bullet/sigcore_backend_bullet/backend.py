@@ -45,6 +45,8 @@ from .frames import compose, invert, to_wxyz, to_xyzw
 from .layout import BASE, EntityIndex, JointIndex
 from .servo import ServoBank
 
+_ORIGIN = (0.0, 0.0, 0.0)
+
 
 class BulletBackend(Backend):
     """PyBullet physics. See the module docstring for how each feature is done.
@@ -301,6 +303,8 @@ class BulletBackend(Backend):
         c = self.client
         if link == BASE:
             lin, ang = pb.getBaseVelocity(e.body, physicsClientId=c)
+            if e.local_pos == _ORIGIN:  # the frame origin is the centre of mass (a primitive object)
+                return np.array(lin, dtype=np.float64), np.array(ang, dtype=np.float64)
             com = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)[0]
             origin = self._frame(e, BASE)[0]
         else:
