@@ -193,7 +193,18 @@ def main() -> None:
 
         quiet = rounds()  # nobody subscribed
         listener = spawn(LISTENER, robot, lidar)
-        run(sim, duration=2.0, transport=keep)  # let the subscriber match
+        # the subscriber process needs a second or more to start and match: until every publisher it listens to
+        # has matched it, a round would measure the unsubscribed case
+        standard = transport.standard
+        assert standard is not None
+        listened = [standard.clock_pub, standard.tf_pub, standard.odom_pub[robot], standard.joint_pub[robot],
+                    standard.scan_pub[(robot, lidar)]]
+        deadline = time.monotonic() + 30.0
+        while any(pub.get_subscription_count() == 0 for pub in listened):
+            if time.monotonic() > deadline or listener.poll() is not None:
+                raise SystemExit("the subscriber process did not match the publishers within 30 s")
+            run(sim, steps=100, transport=keep)
+        run(sim, duration=2.0, transport=keep)  # let the subscriber settle
         loaded = rounds()
         listener.send_signal(signal.SIGTERM)
         counts = listener.communicate(timeout=10)[0].strip()
