@@ -60,3 +60,14 @@ def test_line_map_recovers_an_offset_against_two_walls() -> None:
     refined, used = lines.align(guess, scan)
     assert used > 100
     assert (refined.x, refined.y, refined.yaw) == pytest.approx((truth.x, truth.y, truth.yaw), abs=1e-3)
+
+
+def test_numba_loaded_only_with_a_grid() -> None:
+    """Loading the plugin does not import numba (a world without SLAM pays nothing for it); a grid does."""
+    import subprocess
+    import sys
+
+    code = ("import sys, sigcore_slam; print('numba' in sys.modules); "
+            "sigcore_slam.OccupancyGrid(4, 4, 0.5, (0.0, 0.0)); print('numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "True"]

@@ -35,6 +35,15 @@ class OccupancyGrid:
         self.clamp = np.float32(clamp)
         self.log_odds = np.zeros((height, width), np.float32)
         self.known = np.zeros((height, width), bool)
+        self._stamp = np.zeros(height * width, np.int64)  # scratch of trace(): one update per cell and scan
+        # numba is imported here, not with the plugin (about 0.13 s: a world without SLAM must not pay it), and the
+        # kernel loaded (or, the first time on a machine, compiled) now rather than during the first scan
+        from .trace import trace
+
+        self._trace = trace
+        none_f, none_i, none_b = np.zeros(0, np.float32), np.zeros(0, np.int64), np.zeros(0, bool)
+        trace(self.log_odds.reshape(-1), self.known.reshape(-1), self._stamp, 0, width, np.float32(0.0),
+              np.float32(0.0), none_f, none_f, none_i, none_i, none_b, none_b, self.miss, self.hit, self.clamp)
         self.updates = 0
         self._cache: tuple[int, npt.NDArray[np.int8]] | None = None
 
@@ -69,23 +78,10 @@ class OccupancyGrid:
         end_cells = np.floor(v0 + dv).astype(np.int32) * width + np.floor(u0 + du).astype(np.int32)
         per_step = 1.0 / np.maximum(steps, 1)
         samples = steps + ~end_inside  # a clipped beam also frees the border cell it ends in
-        total = int(samples.sum())
-        flat = self.log_odds.reshape(-1)
-        known = self.known.reshape(-1)
-        if total:
-            su = np.repeat((du * per_step).astype(np.float32), samples)
-            sv = np.repeat((dv * per_step).astype(np.float32), samples)
-            k = np.arange(total, dtype=np.float32) - np.repeat((np.cumsum(samples) - samples).astype(np.float32),
-                                                               samples)
-            # samples are inside the grid, so truncation is floor
-            cells = (np.float32(v0) + sv * k).astype(np.int32) * width + (np.float32(u0) + su * k).astype(np.int32)
-            cells = cells[cells != np.repeat(np.where(end_inside, end_cells, -1), samples)]
-            # duplicated indices all write the same value: one update per crossed cell and scan
-            flat[cells] = np.maximum(flat[cells] - self.miss, -self.clamp)
-            known[cells] = True
-        occupied = end_cells[hits & end_inside]
-        flat[occupied] = np.minimum(flat[occupied] + self.hit, self.clamp)
-        known[occupied] = True
+        self._trace(self.log_odds.reshape(-1), self.known.reshape(-1), self._stamp, 2 * self.updates + 2, width,
+              np.float32(u0), np.float32(v0), (du * per_step).astype(np.float32),
+              (dv * per_step).astype(np.float32), samples.astype(np.int64), end_cells.astype(np.int64), end_inside,
+              hits & end_inside, self.miss, self.hit, self.clamp)
         self.updates += 1
 
     def data(self) -> npt.NDArray[np.int8]:

@@ -93,6 +93,7 @@ class LineMap:
         """
         x, y, yaw = pose.x, pose.y, pose.yaw
         px, py = points[:, 0], points[:, 1]
+        terms = np.empty((9, len(points)))
         used = 0
         for _ in range(rounds):
             c, s = math.cos(yaw), math.sin(yaw)
@@ -101,6 +102,7 @@ class LineMap:
             if used < 3:
                 return pose, 0
             qx, qy = px[ok], py[ok]
+            t = terms[:, :used]
             moved = 0.0
             for _ in range(steps):
                 c, s = math.cos(yaw), math.sin(yaw)
@@ -111,19 +113,34 @@ class LineMap:
                 robust = 1.0 / (1.0 + m2 / 9.0)  # Cauchy weights: points 3 sigma off count half
                 a, b, d = robust * oxx, robust * oxy, robust * oyy
                 aj, bj = a * jx + b * jy, b * jx + d * jy
-                h = np.array([[a.sum(), b.sum(), aj.sum()],
-                              [b.sum(), d.sum(), bj.sum()],
-                              [aj.sum(), bj.sum(), (jx * aj + jy * bj).sum()]])
                 ga, gb = a * ex + b * ey, b * ex + d * ey
-                g = np.array([ga.sum(), gb.sum(), (jx * ga + jy * gb).sum()])
-                try:
-                    step = -np.linalg.solve(h + 1e-9 * np.eye(3), g)
-                except np.linalg.LinAlgError:
+                # the 9 sums of the normal equations in one pass: H = [[a, b, aj], [b, d, bj], [aj, bj, jj]]
+                t[0], t[1], t[2], t[3], t[4] = a, b, d, aj, bj
+                t[5], t[6], t[7] = jx * aj + jy * bj, ga, gb
+                t[8] = jx * ga + jy * gb
+                sa, sb, sd, saj, sbj, sjj, g0, g1, g2 = t.sum(axis=1).tolist()
+                step = _solve3((sa + 1e-9, sb, saj, sd + 1e-9, sbj, sjj + 1e-9), (-g0, -g1, -g2))
+                if step is None:
                     return pose, 0
-                x, y, yaw = x + float(step[0]), y + float(step[1]), yaw + float(step[2])
-                moved = abs(float(step[0])) + abs(float(step[1])) + abs(float(step[2]))
+                x, y, yaw = x + step[0], y + step[1], yaw + step[2]
+                moved = abs(step[0]) + abs(step[1]) + abs(step[2])
                 if moved < 1e-5:
                     break
             if moved < 1e-5:
                 break
         return Pose2(x, y, math.atan2(math.sin(yaw), math.cos(yaw))), used
+
+
+def _solve3(h: tuple[float, float, float, float, float, float],
+            g: tuple[float, float, float]) -> tuple[float, float, float] | None:
+    """Solve the symmetric 3x3 system ``H x = g`` (``h`` = H's upper triangle row by row) by Cramer's rule; ``None``
+    when H is singular (plain floats: ``np.linalg.solve`` costs about 10 µs a call here)."""
+    a, b, c, d, e, f = h
+    m00, m01, m02 = d * f - e * e, c * e - b * f, b * e - c * d
+    det = a * m00 + b * m01 + c * m02
+    if not math.isfinite(det) or abs(det) < 1e-300:
+        return None
+    m11, m12, m22 = a * f - c * c, b * c - a * e, a * d - b * b
+    g0, g1, g2 = g
+    return ((m00 * g0 + m01 * g1 + m02 * g2) / det, (m01 * g0 + m11 * g1 + m12 * g2) / det,
+            (m02 * g0 + m12 * g1 + m22 * g2) / det)
