@@ -49,7 +49,7 @@ class SolverSettings:
     """
 
     max_iterations: int = 60
-    max_attempts: int = 30
+    max_attempts: int = 60
     damping: float = 1e-6
     damping_gain: float = 0.05
     stall_iterations: int = 3
@@ -100,7 +100,7 @@ def solve(robot: RobotModel, chain: Chain, q0: Vector, target: pin.SE3, position
     s = settings or SolverSettings()
     model, data, frame = robot.model, robot.data, chain.tip_frame
     rot_tol = ROTATION_PER_METRE * tolerance
-    rng = np.random.default_rng(s.seed)
+    rng: np.random.Generator | None = None  # made at the first restart (creating one costs about 20 µs)
     lo, hi = chain.lower, chain.upper
     finite = np.isfinite(lo) & np.isfinite(hi)
     sample_lo, sample_hi = np.where(finite, lo, -np.pi), np.where(finite, hi, np.pi)
@@ -111,27 +111,34 @@ def solve(robot: RobotModel, chain: Chain, q0: Vector, target: pin.SE3, position
     wraps = bool(wrap.any())
     turn = np.where(wrap, 2 * np.pi, 0.0)
     fixed_lo, fixed_hi = np.where(wrap, -np.inf, lo), np.where(wrap, np.inf, hi)
-    idx_v = list(chain.idx_v)
+    idx_v: list[int] | slice = list(chain.idx_v)
+    if chain.idx_v == tuple(range(chain.idx_v[0], chain.idx_v[0] + len(chain.idx_v))):
+        idx_v = slice(chain.idx_v[0], chain.idx_v[0] + len(chain.idx_v))  # a view: 0.3 µs against 1.8 for a list
     direct = chain.direct_q
     idx_q = chain.idx_q_array
     p_t, r_t = target.translation, target.rotation
     q = q0.copy()
     err = np.zeros(m)
+    eye = np.eye(m)
     x = chain.clamp(chain_angles(robot, chain, q0))
     best_cost, best = np.inf, (x, np.inf, np.inf)
     iterations = 0
     for attempt in range(1, s.max_attempts + 1):
         if attempt > 1 or s.seed_first:
+            rng = rng or np.random.default_rng(s.seed)
             x = _seed(robot, chain, q0, target, position_only, rng, sample_lo, sample_hi, finite, s.seed_candidates,
                       x if attempt == 1 else None)
         stall_ref, stall_count = np.inf, 0
+        # joints at a (non-wrapping) limit; afterwards only those a step clamped are (x is inside otherwise)
+        at_lo, at_hi = x <= fixed_lo, x >= fixed_hi
+        limited = bool(np.count_nonzero(at_lo) or np.count_nonzero(at_hi))
         for _ in range(s.max_iterations):
             iterations += 1
             if direct:
                 q[idx_q] = x
             else:
                 q = set_chain_angles(robot, chain, q0, x)
-            jac = pin.computeFrameJacobian(model, data, q, frame, pin.LOCAL_WORLD_ALIGNED)[:m, idx_v]
+            jac = pin.computeFrameJacobian(model, data, q, frame, pin.LOCAL_WORLD_ALIGNED)[:m, idx_v]  # a new array
             pose = data.oMf[frame]
             e_pos = p_t - pose.translation
             pos_err = math.sqrt(e_pos @ e_pos)
@@ -151,23 +158,28 @@ def solve(robot: RobotModel, chain: Chain, q0: Vector, target: pin.SE3, position
                 return IkResult(True, x, pos_err, rot_err, iterations, attempt)
             damping = s.damping_gain * float(err @ err) + s.damping
             a = jac @ jac.T
-            a.flat[::m + 1] += damping
+            a += damping * eye
             dx = jac.T @ LLT(a).solve(err)
-            blocked = ((x <= fixed_lo) & (dx < 0)) | ((x >= fixed_hi) & (dx > 0))
-            if blocked.any():
-                jac[:, blocked] = 0.0
-                a = jac @ jac.T
-                a.flat[::m + 1] += damping
-                dx = jac.T @ LLT(a).solve(err)
+            if limited:
+                blocked = (at_lo & (dx < 0)) | (at_hi & (dx > 0))
+                if np.count_nonzero(blocked):  # ndarray.any() costs 1.3 µs, this 0.2
+                    jac[:, blocked] = 0.0
+                    a = jac @ jac.T
+                    a += damping * eye
+                    dx = jac.T @ LLT(a).solve(err)
             step2 = float(dx @ dx)
             if step2 > max_step2:
                 dx *= math.sqrt(max_step2 / step2)
             x = x + dx
             over, under = x > hi, x < lo
-            if over.any() or under.any():
+            limited = bool(np.count_nonzero(over) or np.count_nonzero(under))
+            if limited:
                 if wraps:  # a full-turn joint goes round instead of stopping at its limit
                     x = x - turn * over + turn * under
+                    over, under = over & ~wrap, under & ~wrap
+                    limited = bool(np.count_nonzero(over) or np.count_nonzero(under))
                 x = np.minimum(np.maximum(x, lo), hi)
+                at_lo, at_hi = under, over
             if cost < 0.9 * stall_ref:
                 stall_ref, stall_count = cost, 0
             else:
