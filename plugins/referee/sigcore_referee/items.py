@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-
-import numpy as np
 
 from sigcore.sim.simulation import Simulation
 
@@ -82,14 +81,14 @@ class ItemRule:
             state.held, state.pending, state.rest_since = True, True, None
             return
         state.held = False
-        speed = float(np.linalg.norm(self.sim.backend.get_velocity(state.name)[0]))
+        speed = math.hypot(*self.sim.backend.get_velocity(state.name)[0])  # np.linalg.norm: 2.5 µs
         if speed > self.config.rest_speed:
             state.rest_since = None
             return
         if state.rest_since is None:
             state.rest_since = now
         com = self.sim.backend.get_com(state.name)
-        moved = float(np.linalg.norm(com - state.rest_position)) > MOVE_TOLERANCE
+        moved = math.dist(com, state.rest_position) > MOVE_TOLERANCE
         if (state.pending or moved) and now - state.rest_since >= self.config.rest_time - 1e-9:
             state.pending, state.rest_position = False, com
             self._judge(state, com)
