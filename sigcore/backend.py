@@ -19,6 +19,7 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
+from .errors import SigcoreError
 from .world.models import World
 
 Array = npt.NDArray[np.float64]
@@ -175,5 +176,5 @@ class Backend(ABC):
         """
 
 
-class BackendError(RuntimeError):
+class BackendError(SigcoreError, RuntimeError):
     """The backend could not do what was asked; the message says why and what would be valid."""

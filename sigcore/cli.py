@@ -6,14 +6,19 @@ import logging
 import sys
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from . import __version__, plugins
+from .errors import SigcoreError
 from .world import WorldError, parse_world
+
+if TYPE_CHECKING:
+    from .sim import Simulation
+    from .transport import Transport
 
 app = typer.Typer(help="sigcore: drive a physics simulation through ROS 2 topics and services.",
                   no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False)
@@ -40,9 +45,11 @@ def _check_backend(value: str) -> str:
     return value
 
 
-def _load(world_file: Path, backend: str, controllers: list[str] | None = None) -> object:
+def _load(world_file: Path, backend: str, controllers: list[str] | None = None) -> Simulation:
+    """Build the simulation; every failure is printed as what it is (world file, controller, feature, backend)."""
     from .agent.exceptions import ApiError
-    from .sim import Simulation
+    from .backend import BackendError
+    from .sim import FeatureError, Simulation
 
     overrides: dict[str, str] = {}
     for item in controllers or []:
@@ -52,16 +59,75 @@ def _load(world_file: Path, backend: str, controllers: list[str] | None = None) 
         overrides[agent] = spec
     try:
         world = parse_world(world_file)
-        plugins.notify("sigcore_world_loaded", world=world)
-        return Simulation(world, backend, overrides)
+        return Simulation(world, backend, overrides)  # fires sigcore_world_loaded
     except ApiError as e:
         raise _fail([f"{world_file}: --controller: {e}"]) from None
-    except WorldError as e:
+    except WorldError as e:  # the world file, a controller that cannot be created, a feature's attributes
         raise _fail([str(i) for i in e.issues]) from None
+    except FeatureError as e:  # names the feature and its <plugin> line
+        raise _fail([str(e)]) from None
     except plugins.PluginError as e:
         raise _fail([f"{world_file}: {e}"]) from None
-    except Exception as e:  # a backend that cannot build the world
+    except BackendError as e:
         raise _fail([f"{world_file}: cannot build the world with backend '{backend}': {e}"]) from None
+    except SigcoreError as e:
+        raise _fail([f"{world_file}: {e}"]) from None
+    except KeyboardInterrupt:
+        raise _fail(["interrupted while building the world"], 130) from None
+    except Exception as e:  # not one of ours: the backend's engine (or a bug) failed
+        raise _fail([f"{world_file}: cannot build the world with backend '{backend}': {type(e).__name__}: {e}"]) \
+            from None
+
+
+DEFAULT_TRANSPORT = "ros2"
+"""The transport ``sigcore run`` starts when none is named and it is installed and can start."""
+
+
+def _transport(name: str | None) -> Transport | None:
+    """The transport to start: ``name``, none for ``"none"``, or the default when it can start (else one line)."""
+    if name == "none":
+        return None
+    if name is None:
+        try:
+            cls = plugins.get_transport(DEFAULT_TRANSPORT)
+        except plugins.PluginError as e:  # not installed, or its plugin failed to load (the message says which)
+            err.print(f"{e}: running without a transport (--transport none says so and silences this line)",
+                      markup=False, soft_wrap=True)
+            return None
+        reason = cls.unavailable()
+        if reason is not None:
+            err.print(f"transport '{DEFAULT_TRANSPORT}' cannot start: {reason}; running without a transport "
+                      "(--transport none silences this line)", markup=False, soft_wrap=True)
+            return None
+        return cls()
+    try:
+        cls = plugins.get_transport(name)
+    except plugins.PluginError as e:
+        raise _fail([f"--transport: {e}; or 'none' for a run without a transport"]) from None
+    reason = cls.unavailable()
+    if reason is not None:
+        raise _fail([f"--transport {name}: {reason} (--transport none runs without a transport)"])
+    return cls()
+
+
+def _check_pace(fast: bool, realtime: bool, factor: float | None) -> None:
+    """Refuse more than one of the pace options."""
+    given = [opt for opt, on in (("--fast", fast), ("--realtime", realtime), ("--factor", factor is not None)) if on]
+    if len(given) > 1:
+        raise _fail([f"{' and '.join(given)} exclude each other: choose one pace: --fast (as fast as possible), "
+                     "--realtime (= --factor 1) or --factor F (F times real time)"])
+
+
+def _pace(fast: bool, realtime: bool, factor: float | None, transport_on: bool) -> float | None:
+    """The real-time factor of the run (None: as fast as possible): the option given, else real time with a
+    transport and as fast as possible without."""
+    if fast:
+        return None
+    if realtime:
+        return 1.0
+    if factor is not None:
+        return factor
+    return 1.0 if transport_on else None
 
 
 @app.command()
@@ -70,60 +136,67 @@ def run(
     backend: Annotated[str, typer.Option(help="physics backend", callback=_check_backend)] = "mujoco",
     duration: Annotated[float | None, typer.Option(min=0, help="simulated seconds to run [s]")] = None,
     steps: Annotated[int | None, typer.Option(min=0, help="number of steps to run (wins over --duration)")] = None,
-    realtime: Annotated[bool, typer.Option("--realtime", help="pace the simulation at real time")] = False,
+    fast: Annotated[bool, typer.Option(
+        "--fast", help="as fast as possible (the default without a transport)")] = False,
+    realtime: Annotated[bool, typer.Option(
+        "--realtime", help="pace at real time, = --factor 1 (the default with a transport)")] = False,
     factor: Annotated[float | None, typer.Option(min=0.001, help="pace at this multiple of real time")] = None,
     paused: Annotated[bool, typer.Option("--paused", help="start paused (resume through a transport)")] = False,
-    transport: Annotated[str | None, typer.Option(help="transport plugin, e.g. ros2")] = None,
+    transport: Annotated[str | None, typer.Option(
+        help=f"transport plugin; default '{DEFAULT_TRANSPORT}' when installed; 'none' for a bare batch run")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no progress display")] = False,
     controller: Annotated[list[str] | None, typer.Option(
         help="attach a controller: AGENT=NAME (registered name or package.module:Class); repeatable")] = None,
 ) -> None:
-    """Run a world headless and print what ran."""
+    """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
+    stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed."""
     from .sim import run as run_sim
 
-    if realtime and factor is not None:
-        raise _fail(["--realtime and --factor exclude each other: --realtime is --factor 1"])
-    if paused and transport is None:
-        raise _fail(["--paused needs a transport that can resume the simulation, e.g. --transport ros2"])
-    if duration is None and steps is None and transport is None:
+    _check_pace(fast, realtime, factor)
+    if paused and transport == "none":
+        raise _fail(["--paused needs a transport that can resume the simulation; drop --transport none"])
+    transport_obj = _transport(transport)
+    if paused and transport_obj is None:
+        raise _fail([f"--paused needs a transport that can resume the simulation, and '{DEFAULT_TRANSPORT}' "
+                     "cannot start here (see the line above)"])
+    rtf = _pace(fast, realtime, factor, transport_obj is not None)
+    if duration is None and steps is None and transport_obj is None:
         duration = 10.0
         err.print("no --duration or --steps: running 10 simulated seconds")
-    transport_obj = None
-    if transport is not None:
-        try:
-            transport_obj = plugins.get_transport(transport)()
-        except plugins.PluginError as e:
-            raise _fail([str(e)]) from None
     sim = _load(world_file, backend, controller)
-    from .sim import Simulation
-
-    assert isinstance(sim, Simulation)
     total = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     show_progress = not quiet and total is not None
-    started = time.perf_counter()
+    t0 = time.perf_counter()
     tty = sys.stderr.isatty()
 
     def progress(s: Simulation) -> None:
-        if not show_progress or total is None or time.perf_counter() - started < 2.0:
+        if not show_progress or total is None or time.perf_counter() - t0 < 2.0:
             return
         done = s.step_count
         line = (f"  t = {s.time:8.2f} s  ({100 * done / max(total, 1):5.1f} %, "
-                f"{s.time / (time.perf_counter() - started):.1f}x real time)")
+                f"{s.time / (time.perf_counter() - t0):.1f}x real time)")
         if tty:
             err.print(line, end="\r")
         else:
             err.print(line)
 
-    rtf = 1.0 if realtime else factor
+    def started(s: Simulation) -> None:
+        if transport_obj is None:
+            return
+        pace = "as fast as possible" if rtf is None else f"at {rtf:g}x real time"
+        state = "paused" if s.control.paused else f"running {pace}"
+        err.print(f"ready: transport '{transport_obj.name}' is up, {state}; Ctrl-C or SIGTERM ends the run and "
+                  "prints the results", markup=False, soft_wrap=True)
+
     sim.control.paused = paused  # the simulation's own control: transports pause, step and stop through it
     out.print(f"sigcore {__version__}: world '{sim.world.name}' ({world_file}) on backend '{backend}', "
               f"timestep {sim.dt} s")
     try:
         report = run_sim(sim, duration=duration, steps=steps, realtime_factor=rtf,
                          control=sim.control, transport=transport_obj, progress=progress,
-                         progress_every=2.0 if not tty else 0.25)
-    except KeyboardInterrupt:
-        raise _fail(["interrupted"], 130) from None
+                         progress_every=2.0 if not tty else 0.25, started=started)
+    except KeyboardInterrupt as e:  # a second signal while stopping
+        raise _fail([f"interrupted{f' ({e})' if str(e) else ''}: no results"], 130) from None
     if tty and show_progress:
         err.print(" " * 70, end="\r")
     for kind in ("robot", "object", "human", "agent"):
@@ -133,6 +206,8 @@ def run(
     out.print(f"  steps:    {report.steps}")
     out.print(f"  simulated: {report.sim_time_run:.3f} s    wall: {report.wall_time:.3f} s    "
               f"real-time factor: {report.real_time_factor:.1f}")
+    if report.stopped_by in ("SIGINT", "SIGTERM"):
+        out.print(f"  stopped:  by {report.stopped_by} at t = {report.sim_time:.3f} s")
     for f in report.failures:
         out.print(f"  controller of '{f.agent}' disabled ({f.callback} at t={f.time:.3f} s): {f.error}")
     for name, summary in report.summary.items():
@@ -152,9 +227,6 @@ def check(
 ) -> None:
     """Validate a world file: syntax, references, controllers, plugins, and that the backend builds it."""
     sim = _load(world_file, backend)
-    from .sim import Simulation
-
-    assert isinstance(sim, Simulation)
     out.print(f"{world_file}: ok ({len(sim.agents)} agents, built with '{backend}')")
 
 
@@ -162,36 +234,62 @@ def check(
 def api(
     world_file: Annotated[Path | None, typer.Argument(exists=True, dir_okay=False, help="world XML file")] = None,
     markdown: Annotated[bool, typer.Option("--markdown", help="print the reference as Markdown")] = False,
+    backend: Annotated[str, typer.Option(help="physics backend", callback=_check_backend)] = "mujoco",
+    transport: Annotated[str, typer.Option(help="the transport whose endpoints to list, or 'none'")] = "ros2",
+    every: Annotated[bool, typer.Option("--all", help="also print each agent's endpoints one per line")] = False,
 ) -> None:
-    """Print the API table: every topic and service of every agent of a world."""
-    from .api import api_table, entries_for
+    """Print every endpoint a run of a world will have: the agents' API (with the features'), the publications
+    of the core and the features, and the transport's own topics and services."""
+    from .api.docs import api_markdown
 
     if markdown:
-        from .api.docs import api_markdown
-
         print(api_markdown())
         return
     if world_file is None:
         raise _fail(["give a world file (or --markdown for the reference)"])
-    try:
-        world = parse_world(world_file)
-    except WorldError as e:
-        raise _fail([str(i) for i in e.issues]) from None
-    table = Table(title="agent API (one endpoint per agent of the listed kinds: <agent><suffix>)")
-    for col in ("suffix", "direction", "type", "request -> response", "kinds"):
-        table.add_column(col)
-    for entry in api_table():
-        req = ", ".join(entry.request.model_fields) if entry.request else "(sensor_msgs)"
+    sim = _load(world_file, backend)
+    entries = sim.api_entries()
+    agent_topics = {p.topic for p in sim.publications.declared if p.agent}
+    per_agent: dict[str, str] = {}
+    print("agent API (one endpoint per agent of the listed kinds: <agent><suffix>)")
+    print(f"  {'suffix':<34} {'direction':<9} {'type':<28} {'from':<8} kinds: request -> response")
+    for entry in entries:
+        req = ", ".join(entry.request.model_fields) if entry.request else entry.ros_type
         res = ", ".join(entry.response.model_fields) if entry.response else ""
-        table.add_row(entry.suffix, entry.direction, entry.ros_type, f"{req} -> {res}" if res else req,
-                      ",".join(sorted(entry.kinds)))
-    out.print(table)
-    total = 0
-    for agent in world.agents:
-        n = len(entries_for(agent.kind))
-        total += n
-        out.print(f"  {agent.name} ({agent.kind}): {n} endpoints, e.g. {agent.name}{entries_for(agent.kind)[0].suffix}")
-    out.print(f"{len(world.agents)} agents, {total} endpoints")
+        agents = [a for a, h in sim.agents.items() if h.kind in entry.kinds and (
+            entry.direction != "publish" or entry.name_for(a) in agent_topics)]
+        for agent in agents:
+            per_agent[entry.name_for(agent)] = entry.ros_type
+        print(f"  {entry.suffix:<34} {entry.direction:<9} {entry.ros_type:<28} {entry.origin:<8} "
+              f"{','.join(sorted(entry.kinds))} ({len(agents)}): {req}" + (f" -> {res}" if res else ""))
+    described: dict[str, str] = {}
+    if transport != "none":
+        try:
+            described = plugins.get_transport(transport)().describe(sim)
+        except plugins.PluginError as e:
+            raise _fail([str(e)]) from None
+        except ImportError as e:
+            err.print(f"transport '{transport}' cannot describe its endpoints here ({e}); listing the core's",
+                      markup=False)
+    others = {p.topic: (p.full_type, f"{p.qos}, from {p.origin}") for p in sim.publications.declared
+              if not p.agent}
+    for name, kind in described.items():
+        if name not in per_agent and name not in others:
+            others[name] = (kind, f"transport {transport}")
+    print("\nother topics and services")
+    for name in sorted(others):
+        kind, what = others[name]
+        print(f"  {name:<40} {kind:<45} {what}")
+    by_agent = {a: sum(1 for n in per_agent if n.startswith(a) and n[len(a):len(a) + 1] == "_") for a in sim.agents}
+    print()
+    for agent, handle in sim.agents.items():
+        print(f"  {agent} ({handle.kind}): {by_agent[agent]} endpoints")
+    if every:
+        print("\nevery agent endpoint")
+        for name in sorted(per_agent):
+            print(f"  {name:<50} {per_agent[name]}")
+    print(f"{len(sim.agents)} agents, {len(per_agent)} agent endpoints, {len(others)} others, "
+          f"{len(per_agent) + len(others)} in all")
 
 
 @app.command()

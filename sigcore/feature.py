@@ -5,15 +5,40 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
+from pydantic import BaseModel, ConfigDict
+
 if TYPE_CHECKING:
     from .api.table import ApiEntry
     from .sim.simulation import Simulation
 
 
+class FeatureConfig(BaseModel):
+    """Base of a feature's configuration model: the attributes of its ``<plugin>`` element, one field each.
+
+    Strict (unknown fields are errors) and frozen. Attribute values arrive as strings from the XML; pydantic parses
+    numbers (``"0.2"``) and booleans (``"true"``, ``"false"``); lists need a ``BeforeValidator`` that splits the
+    string (e.g. ``sigcore.world.models.Floats``, ``Tags``). Put units in field descriptions (``"... in [s]"``): the
+    world file's messages show them. A cross-field rule is a ``model_validator`` raising
+    :class:`sigcore.world.exceptions.FieldError` to blame one attribute.
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True, str_strip_whitespace=True, allow_inf_nan=False)
+
+
+class NoConfig(FeatureConfig):
+    """The configuration of a feature that takes no attributes besides ``name``."""
+
+
 class Feature(ABC):
-    """A feature of one simulation, configured by the attributes of its ``<plugin>`` element."""
+    """A feature of one simulation, configured by the attributes of its ``<plugin>`` element.
+
+    The core validates those attributes against :attr:`config_model` (every problem located at its
+    ``file:line:column``) and passes the validated instance to the constructor.
+    """
 
     name: ClassVar[str]
+    config_model: ClassVar[type[BaseModel]] = NoConfig
+    """The pydantic model of the ``<plugin>`` attributes (``name`` excluded); a :class:`FeatureConfig` subclass."""
 
     @classmethod
     def api_entries(cls) -> list[ApiEntry]:
@@ -21,10 +46,26 @@ class Feature(ABC):
         must be in an interface package: bundled features' types are generated into ``sigcore_msgs``."""
         return []
 
+    @classmethod
+    def message_types(cls) -> list[type[BaseModel]]:
+        """The ``sigcore_msgs`` message types of this feature's publications (declared through
+        ``sim.publications``; bundled features' types are generated into ``sigcore_msgs``)."""
+        return []
+
     @abstractmethod
-    def __init__(self, sim: Simulation, config: dict[str, str]) -> None:
-        """Validate ``config`` (raise ``ValueError`` naming the attribute and what is valid) and attach to ``sim``
-        (e.g. with ``sim.add_step_observer``)."""
+    def __init__(self, sim: Simulation, config: BaseModel) -> None:
+        """Attach to ``sim`` (e.g. with ``sim.add_step_observer``).
+
+        Args:
+            sim: The simulation being built.
+            config: The ``<plugin>`` attributes, validated: an instance of :attr:`config_model` (subclasses
+                annotate it with their own model).
+
+        Raises:
+            sigcore.world.exceptions.FieldError: an attribute is wrong for this world (e.g. ``agent`` names no
+                robot); the core reports it at that attribute's ``file:line:column``. A plain ``ValueError`` is
+                reported at the ``<plugin>`` element.
+        """
 
     def summary(self) -> dict[str, object]:
         """Figures to print at the end of a run (e.g. a score)."""

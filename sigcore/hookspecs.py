@@ -89,14 +89,26 @@ def sigcore_register_commands(cli: Any) -> None:
 
 @hookspec
 def sigcore_world_loaded(world: World) -> None:
-    """A world file was parsed and validated, before the backend builds it (called by the command line)."""
+    """A :class:`~sigcore.sim.Simulation` of ``world`` was built: backend, controllers and features, no step yet.
+
+    Fired by the ``Simulation`` constructor itself, so a library user gets it as well as ``sigcore run`` and
+    ``sigcore check``.
+    """
 
 
 @hookspec
 def sigcore_simulation_started(simulation: Simulation) -> None:
-    """The simulation is built, its features created and every ``on_init`` called; steps follow."""
+    """A run starts: every ``on_init`` was called; steps follow.
+
+    Fired by :meth:`Simulation.start <sigcore.sim.Simulation.start>`, which the first ``step()`` and
+    :func:`sigcore.sim.run` call; once per run (again after :meth:`~sigcore.sim.Simulation.stop`).
+    """
 
 
 @hookspec
 def sigcore_simulation_stopped(simulation: Simulation) -> None:
-    """The simulation's run ended (duration reached, stopped, or interrupted)."""
+    """The run ended: duration reached, a stop request (QUITTING, the referee), SIGINT or SIGTERM, or an error.
+
+    Fired by :meth:`Simulation.stop <sigcore.sim.Simulation.stop>`, which :func:`sigcore.sim.run` calls after
+    stopping its transport; once per run.
+    """

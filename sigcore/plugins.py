@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import pluggy
 
 from . import hookspecs
+from .errors import SigcoreError
 
 if TYPE_CHECKING:
     from .backend import Backend
@@ -80,7 +81,7 @@ class PluginInfo:
         return f"'{self.name}' ({origin})"
 
 
-class PluginError(LookupError):
+class PluginError(SigcoreError, LookupError):
     """A name that no plugin registered; the message lists the registered names and the failed plugins.
 
     Attributes:
@@ -105,7 +106,7 @@ class PluginError(LookupError):
         super().__init__(message)
 
 
-class PluginLoadError(RuntimeError):
+class PluginLoadError(SigcoreError, RuntimeError):
     """:func:`register_plugin` refused a plugin; ``info`` says which and why."""
 
     def __init__(self, info: PluginInfo) -> None:

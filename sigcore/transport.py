@@ -15,6 +15,21 @@ class Transport(ABC):
 
     name: ClassVar[str]
 
+    @classmethod
+    def unavailable(cls) -> str | None:
+        """Why this transport cannot start on this machine (e.g. a library it needs is missing, and what to install),
+        or None when it can. ``sigcore run`` asks before choosing its default transport; the default says None."""
+        return None
+
+    def describe(self, sim: Simulation) -> dict[str, str]:
+        """Every endpoint :meth:`start` would create for ``sim`` (name -> interface type), without creating any:
+        what ``sigcore api WORLD`` lists. The default: the agents' API table entries and the declared
+        publications, by their names."""
+        out = {entry.name_for(agent): entry.ros_type for entry in sim.api_entries() if entry.direction != "publish"
+               for agent, handle in sim.agents.items() if handle.kind in entry.kinds}
+        out.update({p.topic: p.full_type for p in sim.publications.declared})
+        return out
+
     @abstractmethod
     def start(self, sim: Simulation) -> None:
         """Create every endpoint for ``sim``'s agents (from the API table) and announce readiness."""

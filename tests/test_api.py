@@ -99,11 +99,12 @@ def test_viewer_services(sim: Simulation) -> None:
     t = _by_suffix()
     got = []
     sim.register_service("referee", lambda sender, text: got.append((sender, text)))
-    assert call(sim, t["_check_service"], "bot", {"service_name": "referee"})["connected"]
+    assert not call(sim, t["_check_service"], "bot", {"service_name": "referee"})["connected"]  # not yet
     assert not call(sim, t["_check_service"], "bot", {"service_name": "judge"})["connected"]
     r = call(sim, t["_send_msg_to_srv"], "bot", {"name": "referee", "msg": "Referee/hi/1"})
     assert not r["ok"] and "connect_to_service" in r["message"]
     assert call(sim, t["_connect_to_service"], "bot", {"service_name": "referee"})["connected"]
+    assert call(sim, t["_check_service"], "bot", {"service_name": "referee"})["connected"]
     assert call(sim, t["_send_msg_to_srv"], "bot", {"name": "referee", "msg": "Referee/hi/1"})["ok"]
     assert got == [("bot", "Referee/hi/1")]
 

@@ -129,20 +129,20 @@ def test_feature_and_greeters_run(hello: Any, tmp_path: Path) -> None:
     assert sim.dispatch.failures == []
 
 
-@pytest.mark.parametrize(("attributes", "message"), [
-    ("", "attribute 'greeting' is required"),
-    ('greeting=" "', "attribute 'greeting' must not be blank"),
-    ('greeting="hi" period="-1"', "attribute 'period' must be > 0 [s], got '-1'"),
-    ('greeting="hi" period="soon"', "attribute 'period' must be a number of seconds, got 'soon'"),
-    ('greting="hi"', "unknown attribute 'greting'; valid attributes: greeting, period"),
+@pytest.mark.parametrize(("attributes", "column", "message"), [
+    ("", 3, "required attribute 'greeting' is missing"),
+    ('greeting=" "', 24, "the greeting is blank"),
+    ('greeting="hi" period="-1"', 38, "'-1' is out of range; valid: period > 0 [s]"),
+    ('greeting="hi" period="soon"', 38, "'soon' is not a number; valid: a number, period > 0 [s]"),
+    ('greeting="hi" perod="1"', 38, "(did you mean 'period'?); valid: name, greeting, period"),
 ])
-def test_feature_config_errors_name_the_attribute(hello: Any, tmp_path: Path, attributes: str,
+def test_feature_config_errors_name_the_attribute(hello: Any, tmp_path: Path, attributes: str, column: int,
                                                    message: str) -> None:
-    """A bad <plugin name="hello"> attribute is a world error at the plugin's line naming the attribute."""
+    """A bad <plugin name="hello"> attribute is a world error at that attribute's line and column."""
     with pytest.raises(WorldError) as e:
         world_sim(tmp_path, attributes)
     [issue] = e.value.issues
-    assert issue.line == 2 and message in issue.message
+    assert (issue.line, issue.column) == (2, column) and message in issue.message
 
 
 def test_greeter_alone_in_python(hello: Any, tmp_path: Path) -> None:

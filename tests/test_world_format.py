@@ -289,8 +289,8 @@ def full() -> World:
 def test_full_world_parses_into_models(full: World) -> None:
     """Every element of full.xml becomes the expected model: rpy poses, split tags, plugin settings."""
     assert (full.name, full.timestep, full.gravity, full.seed) == ("kitchen", 0.001, (0.0, 0.0, -9.8), 7)
-    assert full.plugins == (PluginConfig(name="referee", config={"rules": "cleanup"}, line=4),
-                            PluginConfig(name="slam", config={"agent": "robot_000"}, line=5))
+    assert [(p.name, p.config, p.location(), p.location(next(iter(p.config)))) for p in full.plugins] == [
+        ("referee", {"rules": "cleanup"}, (4, 3), (4, 26)), ("slam", {"agent": "robot_000"}, (5, 3), (5, 23))]
     robot = full.agent("robot_000")
     assert isinstance(robot, Robot)
     assert robot.pose == Pose(xyz=(1.0, 0.3, 0.0), rpy=(0.0, 0.0, 1.5708))
@@ -396,7 +396,7 @@ _DOCUMENTED: dict[str, type[BaseModel]] = {
     "gripper": Gripper, "arm": Arm, "gains": Gains, "object": Object, "human": Human, "agent": BareAgent,
 }
 _NOT_ATTRIBUTES = {"kind", "lidars", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
-                   "config", "line"}
+                   "config", "line", "column", "positions"}
 _BOUNDS = (annotated_types.Gt, annotated_types.Ge, annotated_types.Lt, annotated_types.Le)
 
 
@@ -440,16 +440,3 @@ def test_reference_matches_the_models(tag: str) -> None:
             assert unit == (declared.group(1) if declared else ""), name
         for choice in literal_values(field.annotation):
             assert f"`{choice}`" in valid, name
-
-
-def test_reference_example_is_a_valid_world(tmp_path: Path) -> None:
-    """The complete example of docs/world-format.md parses (next to the test models)."""
-    text = DOCS.read_text(encoding="utf-8")
-    example = re.search(r"^## A complete example.*?```xml\n(.*?)```", text, re.M | re.S)
-    assert example is not None
-    (tmp_path / "models").symlink_to(MODELS, target_is_directory=True)
-    world = parse_world(_world(tmp_path, example.group(1)))
-    full = parse_world(WORLDS / "valid" / "full.xml")
-    assert [a.name for a in world.agents] == [a.name for a in full.agents]
-    expected = full.agent("robot_000").model_copy(update={"urdf": Path("models/tinybot.urdf")})
-    assert world.agent("robot_000") == expected

@@ -1,11 +1,16 @@
 #!/usr/bin/env python3
 """The moderator as a ROS 2 user writes it: plain rclpy (successor of sig_ros's ModeratorCommand).
 
-It connects ``moderator_0`` to the referee service (``moderator_0_check_service``, ``_connect_to_service``), watches
+It connects ``moderator_0`` to the referee service (``moderator_0_connect_to_service``, ``_check_service``), watches
 the robot's collisions (``robot_000_onCollisionMsg``) and reports each collision with furniture or a wall to the
 referee with ``moderator_0_send_msg_to_srv`` as ``Referee/<text>/<points>``. The referee's clean-up rules already
 count collision penalties themselves, so the moderator reports with 0 points by default (``--points -100`` to
 penalise like the original, when the world's referee runs without rules).
+
+It also follows the referee's topics, which any node can read: ``/referee/score`` (std_msgs/Int32, latched: the
+current total), ``/referee/events`` (sigcore_msgs/RefereeEvent: each scored event with its time, kind, points and
+the total after it) and ``/referee/result`` (sigcore_msgs/RefereeResult, latched: the result and the score table
+once the task has ended). With ``--log FILE`` it writes what it received as JSON when the result arrives.
 
 Run (with the simulator running ``--transport ros2``):  python examples/cleanup/moderator_node.py
 """
@@ -13,12 +18,15 @@ Run (with the simulator running ``--transport ros2``):  python examples/cleanup/
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 
 import rclpy
 from rclpy.node import Node
-from sigcore_msgs.msg import OnCollisionMsg
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sigcore_msgs.msg import OnCollisionMsg, RefereeEvent, RefereeResult
 from sigcore_msgs.srv import CheckService, ConnectToService, SendMsgToSrv
+from std_msgs.msg import Int32
 
 ME, ROBOT = "moderator_0", "robot_000"
 OBSTACLES = ("wall_", "table_", "wagon")
@@ -27,9 +35,17 @@ OBSTACLES = ("wall_", "table_", "wagon")
 class Moderator(Node):
     """Reports the robot's collisions with obstacles to the referee."""
 
-    def __init__(self, points: int) -> None:
+    def __init__(self, points: int, log: str | None = None) -> None:
         super().__init__("cleanup_moderator")
         self.points = points
+        self.log = log
+        self.received: dict = {"scores": [], "events": [], "result": None}
+        self.done = False
+        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.create_subscription(Int32, "/referee/score", self.on_score, latched)
+        self.create_subscription(RefereeEvent, "/referee/events", self.on_event, 50)
+        self.create_subscription(RefereeResult, "/referee/result", self.on_result, latched)
         self.check = self.create_client(CheckService, f"{ME}_check_service")
         self.connect = self.create_client(ConnectToService, f"{ME}_connect_to_service")
         self.send = self.create_client(SendMsgToSrv, f"{ME}_send_msg_to_srv")
@@ -44,10 +60,28 @@ class Moderator(Node):
         return future.result()
 
     def connect_referee(self) -> None:
-        if not self.call(self.check, CheckService.Request(service_name="referee")).connected:
-            raise RuntimeError("no referee service in this world (enable <plugin name=\"referee\"/>)")
         r = self.call(self.connect, ConnectToService.Request(service_name="referee"))
-        self.get_logger().info(f"connected to the referee: {r.connected}")
+        if not r.connected:  # e.g. "no service 'referee'; services: none": enable <plugin name="referee"/>
+            raise RuntimeError(f"cannot connect to the referee: {r.message}")
+        connected = self.call(self.check, CheckService.Request(service_name="referee")).connected
+        self.get_logger().info(f"connected to the referee: {connected}")
+
+    def on_score(self, msg: Int32) -> None:
+        self.received["scores"].append(msg.data)
+
+    def on_event(self, msg: RefereeEvent) -> None:
+        self.received["events"].append({"time": msg.time, "kind": msg.kind, "text": msg.text,
+                                        "points": msg.points, "score": msg.score})
+        self.get_logger().info(f"referee: {msg.kind} {msg.points:+d} ({msg.text}), score {msg.score}")
+
+    def on_result(self, msg: RefereeResult) -> None:
+        self.received["result"] = {"result": msg.result, "score": msg.score, "time": msg.time,
+                                   "report": list(msg.report)}
+        self.get_logger().info(f"referee result: {msg.result}, score {msg.score} after {msg.time:.1f} s")
+        if self.log:
+            with open(self.log, "w") as f:
+                json.dump(self.received, f, indent=1)
+        self.done = True  # the task has ended: nothing left to moderate
 
     def on_collision(self, msg: OnCollisionMsg) -> None:
         if msg.name.startswith(OBSTACLES):
@@ -60,12 +94,14 @@ class Moderator(Node):
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=0, help="points per reported collision")
+    ap.add_argument("--log", default=None, help="write the referee's score, events and result here (JSON)")
     args = ap.parse_args()
     rclpy.init()
-    node = Moderator(args.points)
+    node = Moderator(args.points, args.log)
     try:
         node.connect_referee()
-        rclpy.spin(node)
+        while rclpy.ok() and not node.done:
+            rclpy.spin_once(node, timeout_sec=0.5)
         return 0
     except RuntimeError as e:
         node.get_logger().error(str(e))

@@ -39,18 +39,27 @@ def main() -> int:
     ap.add_argument("--backend", default="mujoco")
     ap.add_argument("--timeout", type=float, default=240.0, help="give up after this many wall seconds")
     ap.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (default: from the process id)")
+    ap.add_argument("--referee-log", default=None,
+                    help="the moderator writes the referee topics it received here (JSON)")
     args = ap.parse_args()
     env = {**os.environ, "ROS_DOMAIN_ID": str(args.domain if args.domain is not None else 100 + os.getpid() % 100),
            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "PYTHONUNBUFFERED": "1"}
     t0 = time.perf_counter()
     sim = _start([sys.executable, "-m", "sigcore", "run", str(ROOT / "worlds" / "cleanup.xml"), "--transport", "ros2",
                   "--backend", args.backend, "--factor", str(args.factor), "--duration", "600", "--quiet"], env)
-    nodes = [_start([sys.executable, str(HERE / name)], env) for name in ("moderator_node.py", "robot_node.py")]
+    moderator = [sys.executable, str(HERE / "moderator_node.py")]
+    if args.referee_log:
+        moderator += ["--log", args.referee_log]
+    nodes = [_start(moderator, env), _start([sys.executable, str(HERE / "robot_node.py")], env)]
     try:
         code = sim.wait(timeout=args.timeout)
     except subprocess.TimeoutExpired:
         print(f"run_task: the task did not end within {args.timeout:g} s of wall time", file=sys.stderr)
         code = 1
+    try:
+        nodes[0].wait(timeout=5)  # the moderator ends by itself once it has the referee's result
+    except subprocess.TimeoutExpired:
+        pass
     finally:
         for proc in (*nodes, sim):
             _kill(proc)

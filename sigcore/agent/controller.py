@@ -29,7 +29,8 @@ class Controller:
         return 1.0
 
     def on_collision(self, ctx: SimObj, event: CollisionEvent) -> None:
-        """Called once for each new contact between one of the agent's parts and another entity."""
+        """Called once when one of the agent's parts starts touching another entity (a contact episode; wheels and
+        casters on the floor are none: ``sigcore.sim.contacts``)."""
 
     def on_recv_msg(self, ctx: SimObj, msg: Message) -> None:
         """Called for each text message sent to this agent."""

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True, slots=True)
 class CollisionEvent:
-    """A new contact between one of an agent's parts and another entity.
+    """The start of a contact episode between one of an agent's parts and another entity (``sigcore.sim.contacts``).
 
     Attributes:
         agent: The agent receiving the event.

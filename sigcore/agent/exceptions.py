@@ -2,14 +2,27 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from enum import StrEnum
+from typing import Any
+
+from ..errors import SigcoreError
 
 
-class ApiError(ValueError):
+class ApiError(SigcoreError, ValueError):
     """A request to the agent API was refused (unknown name, NaN, out of range, wrong mode...).
 
     The simulation is unaffected; transports turn this into an error response.
+
+    Args:
+        message: What was wrong and what would be valid.
+        fields: Response fields the error response carries besides ``success`` and ``message`` (e.g. the residual
+            of a failed IK solve); those the response type does not have are dropped. Empty by default.
     """
+
+    def __init__(self, message: str = "", fields: Mapping[str, Any] | None = None) -> None:
+        super().__init__(message)
+        self.fields: dict[str, Any] = dict(fields or {})
 
 
 class GraspRefusal(StrEnum):
@@ -32,5 +45,5 @@ class GraspError(ApiError):
         super().__init__(f"grasp refused ({reason.value}): {message}")
 
 
-class ControllerError(RuntimeError):
+class ControllerError(SigcoreError, RuntimeError):
     """A user controller could not be found or created; the message names the agent and what is valid."""

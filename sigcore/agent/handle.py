@@ -109,7 +109,7 @@ class SimObj:
         return part
 
     def _dynamic(self, what: str) -> None:
-        if not self.sim.modes(self.name)["dynamics"]:
+        if not self.sim.mode(self.name, "dynamics"):
             raise ApiError(f"{what} needs dynamics on for '{self.name}' (set dynamics mode true first)")
 
     # ------------------------------------------------------------------ pose
@@ -265,7 +265,7 @@ class SimObj:
     def gravity_mode(self) -> bool:
         """Whether gravity acts on the entity."""
         self._body()
-        return self.sim.modes(self.name)["gravity"]
+        return self.sim.mode(self.name, "gravity")
 
     def set_gravity_mode(self, enabled: bool) -> None:
         """Switch gravity on or off for this entity."""
@@ -275,7 +275,7 @@ class SimObj:
     def dynamics_mode(self) -> bool:
         """Whether the entity is simulated (True) or held kinematically (False)."""
         self._body()
-        return self.sim.modes(self.name)["dynamics"]
+        return self.sim.mode(self.name, "dynamics")
 
     def set_dynamics_mode(self, enabled: bool) -> None:
         """Simulate the entity (True) or hold it where it is, movable only by set_position/joint angles."""
@@ -285,7 +285,7 @@ class SimObj:
     def collision_enable(self) -> bool:
         """Whether the entity collides."""
         self._body()
-        return self.sim.modes(self.name)["collision"]
+        return self.sim.mode(self.name, "collision")
 
     def set_collision_enable(self, enabled: bool) -> None:
         """Switch collisions on or off for this entity."""
@@ -302,7 +302,17 @@ class SimObj:
     def is_grasped(self) -> bool:
         """Whether a robot holds this entity."""
         self._body()
-        return self.name in self.sim.held_by
+        return self.sim.grasps.is_held(self.name)
+
+    def set_owner(self, part: str, owner: str) -> None:
+        """Record agent ``owner`` as the owner of ``part`` (``"main"`` = main part); informational."""
+        resolved = self._part(part) or MAIN
+        self.sim.agent(owner)  # must exist
+        self.sim.owners.set(self.name, resolved, owner)
+
+    def owner(self, part: str = MAIN) -> str | None:
+        """The owner recorded for ``part``, or None."""
+        return self.sim.owners.get(self.name, self._part(part) or MAIN)
 
     # ------------------------------------------------------------------ queries on vectors
     @staticmethod

@@ -103,24 +103,25 @@ class RobotObj(SimObj):
 
     # ------------------------------------------------------------------ differential drive
     def wheel_geometry(self) -> tuple[float, float]:
-        """``(radius, separation)`` [m] of the differential drive."""
+        """``(radius, separation)`` [m] of the differential drive now in use."""
         return self.sim.wheels(self.name)
 
     def set_wheel(self, radius: float, separation: float) -> None:
-        """Declare the drive geometry (sig_ros ``setWheel``): must match the model within 5 %.
+        """Set the drive geometry (sig_ros ``setWheel``): wheel ``radius`` and ``separation`` [m].
 
-        SIGVerse took the geometry from this call; sigcore's model already has it, so the call checks it instead.
+        From now on :meth:`set_base_velocity` (``cmd_vel``) and the wheel odometry use it; ``Simulation.reset``
+        restores the world file's ``<drive>``. The physical wheels stay the URDF's.
+
+        Raises:
+            ApiError: the robot has no ``<drive>``, or a value is not a finite number in ``(0, 5]`` (radius) or
+                ``(0, 20]`` (separation) [m].
         """
-        r0, s0 = self.wheel_geometry()
-        r = _num(radius, "wheel radius [m]", low=0.0, strict_low=True)
-        s = _num(separation, "wheel distance [m]", low=0.0, strict_low=True)
-        if abs(r - r0) > 0.05 * r0 or abs(s - s0) > 0.05 * s0:
-            raise ApiError(f"wheel geometry {r} m / {s} m does not match the robot's model "
-                           f"(radius {r0} m, separation {s0} m)")
+        self.sim.drive(self.name).set_geometry(radius, separation)
 
     def set_wheel_velocity(self, left: float, right: float) -> None:
         """Set the wheel speeds [rad/s]; positive on both drives forward. Speeds beyond the drive's
-        ``max_wheel_velocity`` are refused."""
+        ``max_wheel_velocity`` are refused. The wheel joints turn at these speeds whatever the geometry set by
+        :meth:`set_wheel`; the odometry turns them into a body velocity with that geometry."""
         drive = self.sim.drive(self.name)
         lim = drive.max_wheel_velocity
         lv = _num(left, "left wheel velocity [rad/s]", low=-lim, high=lim)
@@ -129,11 +130,12 @@ class RobotObj(SimObj):
         self.sim.backend.set_joint_velocity(self.name, drive.right, rv, drive.max_torque)
 
     def set_base_velocity(self, linear: float, angular: float) -> None:
-        """Drive with a body velocity: ``linear`` [m/s] forward and ``angular`` [rad/s] about z (cmd_vel)."""
-        r, s = self.wheel_geometry()
+        """Drive with a body velocity: ``linear`` [m/s] forward and ``angular`` [rad/s] about z (cmd_vel), turned
+        into wheel speeds with the drive geometry now in use (:meth:`set_wheel`)."""
+        drive = self.sim.drive(self.name)
         v = _num(linear, "linear velocity [m/s]")
         w = _num(angular, "angular velocity [rad/s]")
-        self.set_wheel_velocity((v - w * s / 2) / r, (v + w * s / 2) / r)
+        self.set_wheel_velocity(*drive.wheel_speeds(v, w))
 
     # ------------------------------------------------------------------ grasping
     def grippers(self) -> list[str]:
@@ -158,11 +160,13 @@ class RobotObj(SimObj):
         if obj not in self.sim.entity_names or obj == self.name:
             raise GraspError(GraspRefusal.UNKNOWN_OBJECT, f"no object '{obj}'; graspable objects: "
                              f"{', '.join(self.sim.graspable) or 'none'}")
-        if (self.name, part) in self.sim.grasps:
-            raise GraspError(GraspRefusal.ALREADY_GRASPING,
-                             f"'{part}' already holds '{self.sim.grasps[(self.name, part)]}'; release it first")
-        if obj in self.sim.held_by:
-            holder, hpart = self.sim.held_by[obj]
+        grasps = self.sim.grasps
+        held = grasps.holding(self.name, part)
+        if held is not None:
+            raise GraspError(GraspRefusal.ALREADY_GRASPING, f"'{part}' already holds '{held}'; release it first")
+        holder_part = grasps.held_by(obj)
+        if holder_part is not None:
+            holder, hpart = holder_part
             raise GraspError(GraspRefusal.HELD_BY_ANOTHER, f"'{obj}' is held by {holder}/{hpart}")
         if obj not in self.sim.graspable:
             raise GraspError(GraspRefusal.NOT_GRASPABLE, f"'{obj}' is not graspable (graspable=\"true\" in the "
@@ -175,17 +179,15 @@ class RobotObj(SimObj):
             raise GraspError(GraspRefusal.TOO_FAR, f"'{obj}' is {dist:.3f} m from '{part}', beyond the grasp "
                              f"radius {radius} m")
         self.sim.backend.attach(self.name, part, obj)
-        self.sim.grasps[(self.name, part)] = obj
-        self.sim.held_by[obj] = (self.name, part)
+        grasps.hold(self.name, part, obj)
 
     def release(self, part: str) -> str | None:
         """Release what ``part`` holds; returns the released object's name, or None if it held nothing."""
         if part not in self.grippers():
             raise ApiError(f"part '{part}' is not a gripper of '{self.name}'; grippers: "
                            f"{', '.join(self.grippers()) or 'none'}")
-        obj = self.sim.grasps.pop((self.name, part), None)
+        obj = self.sim.grasps.release(self.name, part)
         if obj is not None:
-            self.sim.held_by.pop(obj, None)
             self.sim.backend.detach(self.name, part, obj)
         return obj
 

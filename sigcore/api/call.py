@@ -49,11 +49,17 @@ def call(sim: Simulation, entry: ApiEntry, agent: str,
     except ValidationError as e:
         out = {"success": False, "message": _validation_message(entry, e)}
     except ApiError as e:
-        out = {"success": False, "message": str(e)}
+        out = _refused(entry, e)
     except Exception as e:  # a bug must not stop the simulation either; report it loudly
         log.exception("handler of %s%s raised", agent, entry.suffix)
         out = {"success": False, "message": f"internal error in {entry.suffix}: {type(e).__name__}: {e}"}
     return _complete(entry, agent, out)
+
+
+def _refused(entry: ApiEntry, e: ApiError) -> dict[str, Any]:
+    """The error response of a refusal: the error's fields that the response type has, ``success`` false."""
+    known = entry.response.model_fields if entry.response is not None else {}
+    return {**{k: v for k, v in e.fields.items() if k in known}, "success": False, "message": str(e)}
 
 
 def _complete(entry: ApiEntry, agent: str, out: dict[str, Any]) -> dict[str, Any]:
@@ -72,7 +78,9 @@ def finish(sim: Simulation, entry: ApiEntry, agent: str, deferred: Deferred) -> 
         if fields is None:
             return None
         out: dict[str, Any] = {**fields, "success": True, "message": ""}
-    except (ApiError, TimeoutError) as e:
+    except ApiError as e:
+        out = _refused(entry, e)
+    except TimeoutError as e:
         out = {"success": False, "message": str(e)}
     except Exception as e:
         log.exception("deferred handler of %s%s raised", agent, entry.suffix)

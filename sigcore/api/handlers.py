@@ -113,10 +113,7 @@ def set_mass(sim: Simulation, agent: str, m: Any) -> None:
 
 
 def set_owner(sim: Simulation, agent: str, m: Any) -> None:
-    target = _target(sim, agent, m.name)
-    part = target._part(m.part) or "main"
-    sim.agent(m.owner)  # must exist
-    sim.owners[(target.name, part)] = m.owner
+    _target(sim, agent, m.name).set_owner(m.part, m.owner)
 
 
 def send_msg(sim: Simulation, agent: str, m: Any) -> None:
@@ -190,21 +187,41 @@ def is_grasped(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
     return {"answer": _target(sim, agent, m.name).is_grasped()}
 
 
+def get_collision_state_of_main_part(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
+    return {"collision_state": _target(sim, agent, m.name).collision_state("main")}
+
+
+def service_name(sim: Simulation, name: str) -> str:
+    """The registered viewer service ``name`` designates, compared ignoring case (sig_ros's ``Referee`` is
+    sigcore's ``referee``); an exact match wins.
+
+    Raises:
+        ApiError: no service of that name (the message lists the services), or several that differ only in case.
+    """
+    if name in sim.services:
+        return name
+    matches = [s for s in sim.services if s.casefold() == name.casefold()]
+    if len(matches) == 1:
+        return matches[0]
+    if matches:
+        raise ApiError(f"service name '{name}' matches {', '.join(sorted(matches))}, which differ only in case; "
+                       "give the exact name")
+    raise ApiError(f"no service '{name}'; services: {', '.join(sorted(sim.services)) or 'none'} (names are "
+                   "compared ignoring case)")
+
+
 def check_service(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
-    return {"connected": m.service_name in sim.services}
+    return {"connected": service_name(sim, m.service_name) in sim.connections.get(agent, set())}
 
 
 def connect_to_service(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
-    if m.service_name not in sim.services:
-        raise ApiError(f"no service '{m.service_name}'; services: {', '.join(sim.services) or 'none'}")
-    sim.connections.setdefault(agent, set()).add(m.service_name)
+    sim.connections.setdefault(agent, set()).add(service_name(sim, m.service_name))
     return {"connected": True}
 
 
 def send_msg_to_srv(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
-    if m.name not in sim.services:
-        raise ApiError(f"no service '{m.name}'; services: {', '.join(sim.services) or 'none'}")
-    if m.name not in sim.connections.get(agent, set()):
-        raise ApiError(f"'{agent}' is not connected to service '{m.name}'; call {agent}_connect_to_service first")
-    sim.services[m.name](agent, m.msg)
+    name = service_name(sim, m.name)
+    if name not in sim.connections.get(agent, set()):
+        raise ApiError(f"'{agent}' is not connected to service '{name}'; call {agent}_connect_to_service first")
+    sim.services[name](agent, m.msg)
     return {"ok": True}

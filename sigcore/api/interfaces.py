@@ -36,9 +36,23 @@ def _doc(model: type[BaseModel]) -> str:
     return "".join(f"# {line}\n" for line in (model.__doc__ or "").strip().splitlines())
 
 
-def interface_files(table: list[ApiEntry] | None = None) -> dict[str, str]:
-    """Relative path (``msg/X.msg``, ``srv/Y.srv``) -> content, for every sigcore_msgs type the table uses."""
+def bundled_message_types() -> list[type[BaseModel]]:
+    """The message types of the bundled features' publications (e.g. the referee's ``RefereeEvent``)."""
+    from .. import plugins
+
+    features = plugins.features()
+    return [m for name in BUNDLED_FEATURES if name in features for m in features[name].message_types()]
+
+
+def interface_files(table: list[ApiEntry] | None = None,
+                    messages: list[type[BaseModel]] | None = None) -> dict[str, str]:
+    """Relative path (``msg/X.msg``, ``srv/Y.srv``) -> content, for every sigcore_msgs type the table and the
+    bundled features' publications use."""
     files: dict[str, str] = {}
+    for model in messages if messages is not None else (bundled_message_types() if table is None else []):
+        path = f"msg/{model.__name__}.msg"
+        if files.setdefault(path, HEADER + _doc(model) + _fields(model)) != HEADER + _doc(model) + _fields(model):
+            raise ValueError(f"two publications define {path} differently")
     for entry in table if table is not None else bundled_table():
         if "/" in entry.ros_type or entry.request is None:
             continue  # a standard type such as sensor_msgs/msg/LaserScan

@@ -12,7 +12,9 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import BaseModel
 
+from ..publish import QosClass
 from . import types as t
+from .sources import Collisions, ReceivedMessages, Scans, Source
 
 if TYPE_CHECKING:
     from ..sim.simulation import Simulation
@@ -43,6 +45,9 @@ class ApiEntry:
         handler: Called for requests and received messages; ``None`` for published topics.
         doc: One line for humans.
         origin: ``sig_ros`` for the seeds' names, ``sigcore`` for our additions, or a plugin's name.
+        source: ``publish`` entries only: where the values come from and which agents have the endpoint; the
+            simulation declares one publication per agent from it (:mod:`sigcore.publish`).
+        qos: ``publish`` entries only: the delivery class (:data:`sigcore.publish.QosClass`).
     """
 
     suffix: str
@@ -54,17 +59,24 @@ class ApiEntry:
     handler: Handler | None
     doc: str
     origin: str = "sig_ros"
+    source: Source | None = None
+    qos: QosClass = "events"
 
     def name_for(self, agent: str) -> str:
         """Endpoint name for ``agent``, e.g. ``robot_000_get_obj_position``."""
         return f"{agent}{self.suffix}"
 
 
+_SEND_TO_SERVICE = ("send a text to a service this agent is connected to (both names are sig_ros's: "
+                    "_send_msg_to_srv, _send_msg_to_service)")
+
+
 def _entries() -> list[ApiEntry]:
     from . import handlers as h
 
-    def pub(suffix: str, ros_type: str, msg: type[BaseModel] | None, kinds: frozenset[str], doc: str) -> ApiEntry:
-        return ApiEntry(suffix, "publish", ros_type, msg, None, kinds, None, doc)
+    def pub(suffix: str, ros_type: str, msg: type[BaseModel] | None, kinds: frozenset[str], doc: str,
+            source: Source, qos: QosClass = "events") -> ApiEntry:
+        return ApiEntry(suffix, "publish", ros_type, msg, None, kinds, None, doc, source=source, qos=qos)
 
     def sub(suffix: str, ros_type: str, msg: type[BaseModel], kinds: frozenset[str], handler: Handler, doc: str,
             origin: str = "sig_ros") -> ApiEntry:
@@ -76,10 +88,13 @@ def _entries() -> list[ApiEntry]:
 
     vec = t.EntityVector
     return [
-        pub("_onRecvMsg", "OnRecvMsg", t.OnRecvMsg, ALL, "a text message reached the agent"),
-        pub("_onCollisionMsg", "OnCollisionMsg", t.OnCollisionMsg, BODY, "one message per new colliding pair"),
-        pub("_scan", "sensor_msgs/msg/LaserScan", None, ROBOT, "each lidar scan (robots with a <lidar>)"),
-        sub("_setWheel", "SetWheel", t.SetWheel, ROBOT, h.set_wheel, "check the drive geometry [m]"),
+        pub("_onRecvMsg", "OnRecvMsg", t.OnRecvMsg, ALL, "a text message reached the agent", ReceivedMessages()),
+        pub("_onCollisionMsg", "OnCollisionMsg", t.OnCollisionMsg, BODY, "one part started touching another entity",
+            Collisions()),
+        pub("_scan", "sensor_msgs/msg/LaserScan", None, ROBOT, "each lidar scan (robots with a <lidar>)",
+            Scans(), "sensor"),
+        sub("_setWheel", "SetWheel", t.SetWheel, ROBOT, h.set_wheel,
+            "set the drive geometry [m] used by cmd_vel and odometry (a reset restores the world file's)"),
         sub("_setWheelVelocity", "SetWheelVelocity", t.SetWheelVelocity, ROBOT, h.set_wheel_velocity,
             "wheel speeds [rad/s]"),
         sub("_setJointVelocity", "SetJointVelocity", t.SetJointVelocity, ROBOT, h.set_joint_velocity,
@@ -144,15 +159,21 @@ def _entries() -> list[ApiEntry]:
             h.get_angular_velocity, "angular velocity [rad/s]"),
         srv("_get_collision_state", "GetCollisionState", t.PartRequest, t.CollisionStateResponse, ALL,
             h.get_collision_state, "is that part (main = body) touching something"),
+        srv("_get_collision_state_of_main_part", "GetCollisionStateOfMainPart", t.EntityName,
+            t.CollisionStateResponse, ALL, h.get_collision_state_of_main_part,
+            "is the main part of the agent (or of entity `name`) touching something"),
         srv("_grasp_obj", "GraspObj", t.GraspRequest, t.OkResponse, ROBOT, h.grasp_obj,
-            "grasp obj with a gripper part (refusal reason in message)"),
+            "grasp obj with a gripper part: its centre of mass within the gripper's grasp_radius [m] of the part's "
+            "origin (refusal reason in message)"),
         srv("_is_grasped", "IsGrasped", t.EntityName, t.AnswerResponse, ALL, h.is_grasped, "is the entity held"),
         srv("_check_service", "CheckService", t.ServiceNameRequest, t.ConnectedResponse, ALL, h.check_service,
-            "is that service (e.g. a referee) available"),
+            "is this agent connected to that service (e.g. the referee); names ignore case"),
         srv("_connect_to_service", "ConnectToService", t.ServiceNameRequest, t.ConnectedResponse, ALL,
-            h.connect_to_service, "connect this agent to a service"),
+            h.connect_to_service, "connect this agent to a service; names ignore case"),
         srv("_send_msg_to_srv", "SendMsgToSrv", t.SendToServiceRequest, t.OkResponse, ALL, h.send_msg_to_srv,
-            "send a text to a connected service"),
+            _SEND_TO_SERVICE),
+        srv("_send_msg_to_service", "SendMsgToSrv", t.SendToServiceRequest, t.OkResponse, ALL, h.send_msg_to_srv,
+            _SEND_TO_SERVICE),
     ]
 
 

@@ -40,7 +40,7 @@ OnCollisionMsg = _model("OnCollisionMsg", "A new contact: other entity `name` to
                         name=str, part=str)
 
 # ----------------------------------------------------------------- messages the agent subscribes to
-SetWheel = _model("SetWheel", "Differential-drive geometry [m] (checked against the model).",
+SetWheel = _model("SetWheel", "Differential-drive geometry [m]: used for cmd_vel and odometry from now on.",
                   wheel_radius=float, wheel_distance=float)
 SetWheelVelocity = _model("SetWheelVelocity", "Wheel speeds [rad/s].", left_wheel=float, right_wheel=float)
 SetJointVelocity = _model("SetJointVelocity", "Joint speed [rad/s] with a torque limit `max` [N m] (<= 0: "
@@ -89,10 +89,17 @@ GraspRequest = _model("GraspRequest", "Grasp object `obj` with gripper part `par
 OkResponse = _model("OkResponse", "Whether it was done.", ok=bool, **RESULT)
 AnswerResponse = _model("AnswerResponse", "A yes/no answer.", answer=bool, **RESULT)
 ServiceNameRequest = _model("ServiceNameRequest", "A service (e.g. a referee) by name.", service_name=str)
-ConnectedResponse = _model("ConnectedResponse", "Whether the service is connected.", connected=bool, **RESULT)
+ConnectedResponse = _model("ConnectedResponse", "Whether this agent is connected to the service.", connected=bool,
+                            **RESULT)
 SendToServiceRequest = _model("SendToServiceRequest", "Send `msg` to service `name`.", name=str, msg=str)
 
 
 def field_types(model: type[BaseModel]) -> list[tuple[str, str]]:
     """``(ROS type, field name)`` of every field of ``model``, in order."""
     return [(FIELD_TYPES[f.annotation], name) for name, f in model.model_fields.items()]
+
+
+def message_model(type_name: str, doc: str, /, **fields: Any) -> type[ApiModel]:
+    """A message type for a feature's publication (``sigcore_msgs/msg/<type_name>`` when the feature is bundled):
+    fields of the types of :data:`FIELD_TYPES`, with their zero defaults."""
+    return _model(type_name, doc, **fields)

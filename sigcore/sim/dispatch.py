@@ -76,6 +76,11 @@ class Dispatcher:
             self._call(name, "on_init", time)
         self._init = []
 
+    @property
+    def has_actions(self) -> bool:
+        """Whether any controller has an ``on_action`` scheduled (the step loop skips :meth:`actions` otherwise)."""
+        return bool(self._action)
+
     def actions(self, step: int, time: float) -> None:
         """Call every ``on_action`` due at ``step`` and schedule its next call."""
         heap = self._action

@@ -2,6 +2,23 @@
 
 from __future__ import annotations
 
+from ..errors import SigcoreError
 
-class SimulationError(RuntimeError):
+
+class SimulationError(SigcoreError, RuntimeError):
     """The simulation cannot do what was asked (e.g. build a world, or step after it was closed)."""
+
+
+class FeatureError(SimulationError):
+    """A feature named in the world raised while being created, for a reason other than its attributes (those are
+    reported as a located :class:`~sigcore.world.WorldError`).
+
+    Attributes:
+        feature: The feature's name (``<plugin name="...">``).
+        where: ``file:line`` of its ``<plugin>`` element.
+        cause: What the feature's constructor raised.
+    """
+
+    def __init__(self, feature: str, where: str, cause: Exception) -> None:
+        self.feature, self.where, self.cause = feature, where, cause
+        super().__init__(f"{where}: feature '{feature}' failed while being created: {type(cause).__name__}: {cause}")

@@ -42,6 +42,14 @@ class Scan:
     scan_time: float
     ranges: Array
 
+    def fields(self, frame: str, stamp_ns: int) -> dict[str, object]:
+        """The ``sensor_msgs/LaserScan`` fields of this scan in TF frame ``frame``, stamped ``stamp_ns`` [ns]
+        (ranges as float32)."""
+        return {"header": {"stamp": stamp_ns, "frame_id": frame}, "angle_min": self.angle_min,
+                "angle_max": self.angle_max, "angle_increment": self.angle_increment, "time_increment": 0.0,
+                "scan_time": self.scan_time, "range_min": self.range_min, "range_max": self.range_max,
+                "ranges": np.ascontiguousarray(self.ranges, dtype=np.float32)}
+
 
 class LidarSensor:
     """A lidar of a robot; :meth:`scan` casts every beam at once through the backend."""

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..backend import Backend
 from ..geometry import quat_yaw
-from ..world.models import Drive
+from .drive import DriveState
 
 
 @dataclass
@@ -38,9 +38,10 @@ class WheelOdometry:
 
     The odom frame starts at the robot's initial pose (projected to the ground plane): at time 0, ``odom`` and
     the world coincide with the robot's start. ``noise`` scales a Gaussian error on each wheel's speed [fraction].
+    The wheel radius and separation are read from the robot's :class:`~sigcore.sim.drive.DriveState` at each step.
     """
 
-    def __init__(self, robot: str, drive: Drive, backend: Backend, dt: float, noise: float = 0.0,
+    def __init__(self, robot: str, drive: DriveState, backend: Backend, dt: float, noise: float = 0.0,
                  seed: int = 0) -> None:
         self.robot = robot
         self.drive = drive
@@ -63,8 +64,7 @@ class WheelOdometry:
         if self.noise > 0:
             wl *= 1.0 + self._rng.normal(0.0, self.noise)
             wr *= 1.0 + self._rng.normal(0.0, self.noise)
-        v = d.radius * (wl + wr) / 2.0
-        w = d.radius * (wr - wl) / d.separation
+        v, w = d.body_velocity(wl, wr)  # with the geometry now in use (``_setWheel`` may have changed it)
         s = self.state
         mid = s.yaw + w * self.dt / 2.0
         s.x += v * math.cos(mid) * self.dt

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import time as _time
 from collections.abc import Callable
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 __all__ = ["RunControl", "RunReport", "run"]
 
-from .. import plugins
 from ..transport import Transport
-from .control import RunControl
+from .control import RunControl, stop_on_signals
 from .dispatch import ControllerFailure
 from .simulation import Simulation
 
@@ -27,6 +27,9 @@ class RunReport:
         failures: Controllers disabled during the run.
         summary: What each feature reported.
         sim_time_run: Simulated time covered by this run [s].
+        stopped_by: Why the run ended before its duration or steps: ``"SIGINT"`` or ``"SIGTERM"`` for a signal,
+            ``"request"`` for ``control.stop`` set by a transport (QUITTING) or a feature (e.g. the referee at the
+            end of its task); None when it ran to its end.
     """
 
     agents: dict[str, list[str]]
@@ -36,6 +39,7 @@ class RunReport:
     failures: list[ControllerFailure] = field(default_factory=list)
     summary: dict[str, object] = field(default_factory=dict)
     sim_time_run: float = 0.0
+    stopped_by: str | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -46,8 +50,14 @@ class RunReport:
 def run(sim: Simulation, *, duration: float | None = None, steps: int | None = None,
         realtime_factor: float | None = None, control: RunControl | None = None,
         transport: Transport | None = None, progress: Callable[[Simulation], None] | None = None,
-        progress_every: float = 0.5) -> RunReport:
+        progress_every: float = 0.5, started: Callable[[Simulation], None] | None = None,
+        handle_signals: bool = True) -> RunReport:
     """Run ``sim`` until ``duration`` simulated seconds or ``steps`` steps have passed (or ``control.stop``).
+
+    The simulation is started (:meth:`Simulation.start`), then the transport; at the end the transport is stopped
+    and then the simulation (:meth:`Simulation.stop`), however the run ends. SIGINT and SIGTERM end it like a
+    ``control.stop`` request (see :func:`sigcore.sim.control.stop_on_signals`), so the report is never lost; a second
+    signal while stopping raises ``KeyboardInterrupt``.
 
     Args:
         sim: The simulation.
@@ -58,47 +68,61 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         transport: Serviced between steps (never during one).
         progress: Called about every ``progress_every`` wall seconds.
         progress_every: Wall seconds between progress calls [s].
+        started: Called once the simulation and the transport have started, before the first step.
+        handle_signals: Turn SIGINT and SIGTERM into a stop request for the duration of the run (main thread only).
     """
     control = control or sim.control
     target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     start_step, start_time = sim.step_count, sim.time
-    wall0 = _time.perf_counter()
-    pace_time, pace_wall = start_time, wall0  # real-time pacing reference, moved on while paused
-    next_progress = wall0 + progress_every
-    sim.start()
-    if transport is not None:
-        transport.start(sim)
-    try:
-        while not control.stop and (target is None or sim.step_count - start_step < target):
+    with stop_on_signals(control) if handle_signals else nullcontext():
+        sim.start()
+        try:
             if transport is not None:
-                idle = control.paused or (control.lockstep and control.pending_steps == 0)
-                transport.service(0.01 if idle else 0.0)
-            if control.reset:
-                control.reset = False
-                sim.reset()
-            if control.paused or control.lockstep:
-                if control.pending_steps <= 0:
-                    if transport is None:
-                        break  # nothing can ever resume us
-                    pace_time, pace_wall = sim.time, _time.perf_counter()  # no catching up after a pause
-                    continue
-                control.pending_steps -= 1
-            sim.step()
-            now = _time.perf_counter()
-            if realtime_factor is not None:
-                ahead = (sim.time - pace_time) / realtime_factor - (now - pace_wall)
-                if ahead > 0.001:
-                    _time.sleep(ahead)
-            if progress is not None and now >= next_progress:
-                next_progress = now + progress_every
-                progress(sim)
-    finally:
-        if transport is not None:
-            transport.stop()
-        plugins.notify("sigcore_simulation_stopped", simulation=sim)
-    wall = _time.perf_counter() - wall0
+                transport.start(sim)
+            try:
+                if started is not None:
+                    started(sim)
+                wall = _loop(sim, target, start_step, realtime_factor, control, transport, progress, progress_every)
+            finally:
+                if transport is not None:
+                    transport.stop()
+        finally:
+            sim.stop()
     kinds: dict[str, list[str]] = {}
     for name, handle in sim.agents.items():
         kinds.setdefault(handle.kind, []).append(name)
+    stopped_by = (control.stop_reason or "request") if control.stop else None
     return RunReport(kinds, sim.step_count - start_step, sim.time, wall, list(sim.dispatch.failures),
-                     sim.summary(), sim.time - start_time)
+                     sim.summary(), sim.time - start_time, stopped_by)
+
+
+def _loop(sim: Simulation, target: int | None, start_step: int, realtime_factor: float | None, control: RunControl,
+          transport: Transport | None, progress: Callable[[Simulation], None] | None, progress_every: float) -> float:
+    """Step until ``target`` steps or a stop request; the wall-clock time the stepping took [s]."""
+    wall0 = _time.perf_counter()
+    pace_time, pace_wall = sim.time, wall0  # real-time pacing reference, moved on while paused
+    next_progress = wall0 + progress_every
+    while not control.stop and (target is None or sim.step_count - start_step < target):
+        if transport is not None:
+            idle = control.paused or (control.lockstep and control.pending_steps == 0)
+            transport.service(0.01 if idle else 0.0)
+        if control.reset:
+            control.reset = False
+            sim.reset()
+        if control.paused or control.lockstep:
+            if control.pending_steps <= 0:
+                if transport is None:
+                    break  # nothing can ever resume us
+                pace_time, pace_wall = sim.time, _time.perf_counter()  # no catching up after a pause
+                continue
+            control.pending_steps -= 1
+        sim.step()
+        now = _time.perf_counter()
+        if realtime_factor is not None:
+            ahead = (sim.time - pace_time) / realtime_factor - (now - pace_wall)
+            if ahead > 0.001:
+                _time.sleep(ahead)
+        if progress is not None and now >= next_progress:
+            next_progress = now + progress_every
+            progress(sim)
+    return _time.perf_counter() - wall0

@@ -14,16 +14,25 @@ from ..agent.events import CollisionEvent, Message
 from ..agent.exceptions import ApiError, ControllerError
 from ..agent.handle import SimObj
 from ..agent.robot import RobotObj
+from ..api.sources import Source
 from ..api.table import ApiEntry, api_table
 from ..backend import Array, Backend
 from ..feature import Feature
+from ..publish import Publication, Publications, Publisher
 from ..world.exceptions import WorldError, WorldIssue
-from ..world.models import Drive, Human, Object, Robot, World
-from ..world.urdf import UrdfModel, read_urdf
+from ..world.models import Object, Robot, World
+from ..world.urdf import UrdfModel
+from .contacts import ContactTracker, rolling_parts
 from .control import RunControl
 from .dispatch import Dispatcher
+from .drive import DriveState
+from .exceptions import FeatureError
+from .frames import Frames
+from .grasps import Grasps
 from .lidar import LidarSensor, Scan
+from .modes import Mode, Modes
 from .odometry import WheelOdometry
+from .owners import Owners
 
 log = logging.getLogger("sigcore")
 
@@ -53,22 +62,24 @@ class Simulation:
         self.step_count = 0
         self.control = RunControl()
         self._models = {a.name: a for a in world.agents}
+        self._drives = {r.name: DriveState(r.name, r.drive) for r in world.agents
+                        if isinstance(r, Robot) and r.drive is not None}
         self.entity_names: list[str] = [e.name for e in world.entities]
         self._urdfs: dict[str, UrdfModel] = {
-            r.name: read_urdf(world.resolve(r.urdf)) for r in world.agents if isinstance(r, Robot)
+            r.name: world.urdf(r.name).model for r in world.agents if isinstance(r, Robot)
         }
         self.graspable: list[str] = [o.name for o in world.agents if isinstance(o, Object) and o.graspable]
-        self.grasps: dict[tuple[str, str], str] = {}
-        self.held_by: dict[str, tuple[str, str]] = {}
-        self.owners: dict[tuple[str, str], str] = {}
+        self.grasps = Grasps()
+        """Who holds what (changed by ``RobotObj.grasp`` / ``release``; read by anyone)."""
+        self.owners = Owners()
         self.services: dict[str, Callable[[str, str], None]] = {}
         self.connections: dict[str, set[str]] = {}
-        self._modes = {e.name: self._initial_modes(e) for e in world.entities}
+        self._modes = Modes(self.backend, world.entities)
         self._wrench: dict[tuple[str, str | None], list[Array]] = {}
         self._outbox: list[Message] = []
-        self._contacts_step = -1
-        self._triples: frozenset[tuple[str, str, str]] = frozenset()
-        self._pairs: frozenset[tuple[int, int]] = frozenset()
+        self._contacts = ContactTracker(
+            self.backend, [a.name for a in world.agents],
+            {r.name: rolling_parts(r, self._urdfs[r.name]) for r in world.agents if isinstance(r, Robot)}, self.dt)
         self.agents: dict[str, SimObj] = {
             a.name: (RobotObj if isinstance(a, Robot) else SimObj)(self, a.name, a.kind) for a in world.agents
         }
@@ -82,17 +93,18 @@ class Simulation:
             for r in world.agents if isinstance(r, Robot) for i, lidar in enumerate(r.lidars)
         ]
         self.odometry: dict[str, WheelOdometry] = {}
+        self._dt_ns = round(self.dt * 1e9)
+        self.publications = Publications(lambda: self.step_count * self._dt_ns, self._attach_sources)
+        self._sources: list[tuple[Source, dict[str, Publisher]]] = []
+        self.frames = Frames(self)
         self._attach_controllers(controllers or {})
         self.features: dict[str, Feature] = {}
         self._create_features()
-        self._started = False
+        self._declare_agent_publications()
+        self._started = False  # between start() and stop()
+        plugins.notify("sigcore_world_loaded", world=world)
 
     # ------------------------------------------------------------------ construction
-    @staticmethod
-    def _initial_modes(entity: Robot | Object | Human) -> dict[str, bool]:
-        static = getattr(entity, "static", False)
-        return {"gravity": True, "dynamics": not static, "collision": True}
-
     def _issue(self, agent: str, attribute: str | None, message: str, line: int | None = None) -> WorldIssue:
         if line is not None:
             return WorldIssue(self.world.source, line, 1, "plugin", attribute, message)
@@ -114,11 +126,11 @@ class Simulation:
                 cls = resolve_controller(spec, registered)
                 controller = cls()
             except ControllerError as e:
-                issues.append(self._issue(agent.name, "controller", str(e)))
+                issues.append(self._issue(agent.name, "controller", f"agent '{agent.name}': {e}"))
                 continue
             except Exception as e:
-                issues.append(self._issue(agent.name, "controller",
-                                          f"creating controller '{spec}' raised {type(e).__name__}: {e}"))
+                issues.append(self._issue(agent.name, "controller", f"controller '{spec}' of agent '{agent.name}' "
+                                          f"raised {type(e).__name__} while being created: {e}"))
                 continue
             self.dispatch.add(self.agents[agent.name], controller)
         if issues:
@@ -131,25 +143,61 @@ class Simulation:
         self.dispatch.add(self.agent(agent), controller)
 
     def _create_features(self) -> None:
-        issues = []
+        """Validate each ``<plugin>``'s attributes against its feature's ``config_model``, then create it; every
+        problem is a WorldIssue at its attribute (a ``FieldError`` from a constructor names the attribute)."""
+        from ..world.exceptions import FieldError
+        from ..world.plugin_config import plugin_issue, validate_plugin
+
+        issues: list[WorldIssue] = []
         for cfg in self.world.plugins:
             try:
                 cls = plugins.get_feature(cfg.name)
+                config = validate_plugin(self.world, cfg, cls.config_model)
             except plugins.PluginError as e:
-                issues.append(self._issue("", "name", str(e), cfg.line))
+                issues.append(plugin_issue(self.world, cfg, "name", str(e)))
+                continue
+            except WorldError as e:
+                issues.extend(e.issues)
                 continue
             try:
-                self.features[cfg.name] = cls(self, dict(cfg.config))
+                self.features[cfg.name] = cls(self, config)
+            except FieldError as e:
+                issues.append(plugin_issue(self.world, cfg, e.field, str(e)))
             except (ValueError, KeyError, TypeError) as e:
-                issues.append(self._issue("", None, f"plugin '{cfg.name}': {e}", cfg.line))
+                issues.append(plugin_issue(self.world, cfg, None, f"plugin '{cfg.name}': {e}"))
+            except Exception as e:  # not its attributes: the feature itself failed
+                raise FeatureError(cfg.name, f"{self.world.source}:{cfg.line}", e) from e
         if issues:
             raise WorldError(issues)
+
+    def _declare_agent_publications(self) -> None:
+        """One publication per agent for every ``publish`` entry of the API table (the core's and the features')."""
+        for entry in self.api_entries():
+            if entry.direction != "publish" or entry.source is None:
+                continue
+            publishers = {}
+            for agent, handle in self.agents.items():
+                if handle.kind in entry.kinds and entry.source.has(self, agent):
+                    publishers[agent] = self.publications.declare(Publication(
+                        entry.name_for(agent), entry.ros_type, entry.qos, entry.doc, entry.origin, agent,
+                        entry.request))
+            if publishers:
+                self._sources.append((entry.source, publishers))
+
+    def _attach_sources(self) -> None:
+        for source, publishers in self._sources:
+            source.attach(self, publishers)
 
     # ------------------------------------------------------------------ lookups used by handles and the API
     @property
     def time(self) -> float:
         """Simulation time [s]: steps taken times the timestep (a reset does not move it back)."""
         return self.step_count * self.dt
+
+    @property
+    def stamp_ns(self) -> int:
+        """Simulation time [ns], exact (what publications are stamped with)."""
+        return self.step_count * self._dt_ns
 
     def agent(self, name: str) -> SimObj:
         """Handle of an agent; ``ApiError`` listing valid names if there is none."""
@@ -173,31 +221,32 @@ class Simulation:
         return model
 
     def urdf(self, robot: str) -> UrdfModel:
-        """The URDF names of robot ``robot``."""
+        """The URDF names of robot ``robot`` (of the world's shared document, ``World.urdf``)."""
         return self._urdfs[robot]
 
-    def drive(self, robot: str) -> Drive:
-        """The differential drive of ``robot``; ``ApiError`` if it has none."""
-        drive = self.robot_model(robot).drive
-        if drive is None:
+    def drive(self, robot: str) -> DriveState:
+        """The differential drive of ``robot`` as it is now (geometry set by ``_setWheel``; the world file's
+        ``<drive>`` is its ``model``); ``ApiError`` if it has none."""
+        state = self._drives.get(robot)
+        if state is None:
             raise ApiError(f"robot '{robot}' has no <drive> in the world file")
-        return drive
+        return state
 
     def wheels(self, robot: str) -> tuple[float, float]:
-        """``(radius, separation)`` [m] of ``robot``'s drive."""
-        d = self.drive(robot)
-        return d.radius, d.separation
+        """``(radius, separation)`` [m] of ``robot``'s drive now in use."""
+        return self.drive(robot).geometry()
 
     def modes(self, entity: str) -> dict[str, bool]:
-        """Current gravity/dynamics/collision modes of an entity."""
-        return self._modes[entity]
+        """Current gravity/dynamics/collision modes of an entity (a copy)."""
+        return self._modes.of(entity)
 
-    def set_mode(self, entity: str, mode: str, enabled: bool) -> None:
+    def mode(self, entity: str, mode: Mode) -> bool:
+        """Whether ``mode`` (``gravity``, ``dynamics``, ``collision``) is on for ``entity``."""
+        return self._modes.get(entity, mode)
+
+    def set_mode(self, entity: str, mode: Mode, enabled: bool) -> None:
         """Switch ``gravity``, ``dynamics`` or ``collision`` for an entity."""
-        setter = {"gravity": self.backend.set_gravity_mode, "dynamics": self.backend.set_dynamics_mode,
-                  "collision": self.backend.set_collision_mode}[mode]
-        setter(entity, enabled)
-        self._modes[entity][mode] = enabled
+        self._modes.set(entity, mode, enabled)
 
     def register_service(self, name: str, handler: Callable[[str, str], None]) -> None:
         """Offer a viewer service (e.g. a referee): ``handler(sender, text)`` receives ``_send_msg_to_srv`` texts
@@ -246,35 +295,18 @@ class Simulation:
 
     # ------------------------------------------------------------------ contacts
     def contact_triples(self) -> frozenset[tuple[str, str, str]]:
-        """Current contacts as ``(entity, own part, other entity)``, both directions."""
-        if self._contacts_step != self.step_count:
-            self._refresh_contacts()
-        return self._triples
+        """Current contacts as ``(entity, own part, other entity)``, both directions, the floor (``"ground"``)
+        and wheels included."""
+        return self._contacts.triples(self.step_count)
 
-    def _refresh_contacts(self) -> None:
-        self._contacts_step = self.step_count
-        pairs = self.backend.contacts()
-        if pairs == self._pairs:
-            return
-        self._pairs = pairs
-        part_of = self.backend.part_of
-        triples = set()
-        for a, b in pairs:
-            ea, pa = part_of(a)
-            eb, pb = part_of(b)
-            if ea != eb:
-                triples.add((ea, pa, eb))
-                triples.add((eb, pb, ea))
-        self._triples = frozenset(triples)
+    def rolling_parts(self, robot: str) -> frozenset[str]:
+        """Wheels and casters of ``robot`` (see ``sigcore.sim.contacts``): their floor contacts are no events."""
+        return self._contacts.rolling_parts(robot)
 
     def _collisions(self) -> None:
-        before = self._triples
-        self._refresh_contacts()
-        if self._triples is before:
-            return
-        for entity, part, other in sorted(self._triples - before):
-            if entity not in self.agents:
-                continue  # the ground
+        """Deliver the contact episodes that start at this step (``sigcore.sim.contacts``) to controllers and
+        observers."""
+        for entity, part, other in self._contacts.events(self.step_count):
             event = CollisionEvent(entity, part, other, self.time)
             self.dispatch.collision(event)
             for observer in self.collision_observers:
@@ -286,13 +318,24 @@ class Simulation:
         self._step_observers.append(observer)
 
     def start(self) -> None:
-        """Call every ``on_init``, then every ``on_action`` due at time 0 (done by the first step if not called)."""
+        """Start a run: call every ``on_init`` not called yet, then every ``on_action`` due now, then fire
+        ``sigcore_simulation_started``. The first :meth:`step` calls it; idempotent until :meth:`stop`, after which
+        it starts the next run (``on_init`` is never called twice)."""
         if self._started:
             return
         self._started = True
         self.dispatch.init(self.time)
         self.dispatch.actions(self.step_count, self.time)
         plugins.notify("sigcore_simulation_started", simulation=self)
+
+    def stop(self) -> None:
+        """End the run: fire ``sigcore_simulation_stopped`` (once; idempotent, and nothing before the run started).
+        :func:`sigcore.sim.run` calls it at the end however the run ends; a library user who steps the simulation
+        calls it when done. A later :meth:`step` or :meth:`start` starts a new run."""
+        if not self._started:
+            return
+        self._started = False
+        plugins.notify("sigcore_simulation_stopped", simulation=self)
 
     def step(self, n: int = 1) -> None:
         """Advance ``n`` fixed steps: messages, forces, physics, contacts, controllers, sensors, observers."""
@@ -311,7 +354,7 @@ class Simulation:
             self.step_count += 1
             if dispatch.collision_listeners or self.collision_observers:
                 self._collisions()
-            if dispatch._action:
+            if dispatch.has_actions:
                 dispatch.actions(self.step_count, self.time)
             for lidar in self.lidars:
                 if self.step_count % lidar.period_steps == 0:
@@ -328,15 +371,15 @@ class Simulation:
         dropped, modes return to the world file's."""
         self.backend.reset()
         self.grasps.clear()
-        self.held_by.clear()
+        self.owners.clear()
         self._wrench.clear()
         self._outbox.clear()
-        self._modes = {e.name: self._initial_modes(e) for e in self.world.entities}
-        self._contacts_step = -1
-        self._pairs = frozenset()
-        self._triples = frozenset()
+        self._modes.reset()
+        self._contacts.reset()
         for odo in self.odometry.values():
             odo.reset()
+        for drive in self._drives.values():
+            drive.reset()
         for feature in self.features.values():
             feature.reset()
 

@@ -17,10 +17,10 @@ from .models import (
     World,
 )
 from .parser import parse_world
-from .urdf import UrdfError, UrdfJoint, UrdfModel, read_urdf
+from .urdf import UrdfDocument, UrdfError, UrdfFiles, UrdfJoint, UrdfModel, read_urdf
 
 __all__ = [
     "Arm", "BareAgent", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "Object", "PluginConfig",
-    "Pose", "Robot", "UrdfError", "UrdfJoint", "UrdfModel", "World", "WorldError", "WorldIssue",
-    "parse_world", "read_urdf",
+    "Pose", "Robot", "UrdfDocument", "UrdfError", "UrdfFiles", "UrdfJoint", "UrdfModel", "World", "WorldError",
+    "WorldIssue", "parse_world", "read_urdf",
 ]

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..errors import SigcoreError
+
 
 @dataclass(frozen=True)
 class WorldIssue:
@@ -41,7 +43,7 @@ class WorldIssue:
         return f"{self.where}: {what}{self.message}"
 
 
-class WorldError(ValueError):
+class WorldError(SigcoreError, ValueError):
     """A world file is invalid; carries every problem found, each with its location."""
 
     def __init__(self, issues: list[WorldIssue]) -> None:
@@ -49,7 +51,7 @@ class WorldError(ValueError):
         super().__init__("\n".join(str(i) for i in issues))
 
 
-class FieldError(ValueError):
+class FieldError(SigcoreError, ValueError):
     """Raised by a cross-field validator of a model to blame one field (the parser points at that attribute).
 
     Attributes:

@@ -22,6 +22,7 @@ from pydantic import (
 )
 
 from .exceptions import FieldError
+from .urdf import UrdfDocument, UrdfFiles
 
 NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]*$"
 """Entity names become ROS 2 topic names (``<agent>_setPosition``): a letter, then letters, digits, ``_``."""
@@ -108,12 +109,20 @@ PoseField = Annotated[Pose, BeforeValidator(Pose.parse)]
 class PluginConfig(_Model):
     """``<plugin name="slam" agent="robot_000" .../>``: a feature plugin enabled for this world.
 
-    Every other attribute is passed to the plugin as a string; the plugin validates it.
+    Every other attribute is kept as a string in ``config``; the core validates them against the feature's
+    ``config_model`` when the simulation creates the feature (``sigcore.world.plugin_config``).
     """
 
     name: Name = Field(description="plugin to enable, e.g. 'slam'")
     config: dict[str, str] = Field(default_factory=dict)
     line: int = 0
+    column: int = 0
+    positions: dict[str, tuple[int, int]] = Field(default_factory=dict,
+                                                  description="(line, column) of each attribute, for messages")
+
+    def location(self, attribute: str | None = None) -> tuple[int, int]:
+        """``(line, column)`` of attribute ``attribute`` (of the element if ``None`` or absent)."""
+        return self.positions.get(attribute or "", (self.line, self.column))
 
 
 class Drive(_Model):
@@ -126,6 +135,12 @@ class Drive(_Model):
     separation: float = Field(gt=0, le=20, description="distance between the wheels in [m]")
     max_wheel_velocity: float = Field(default=20.0, gt=0, description="wheel speed limit in [rad/s]")
     max_torque: float = Field(default=20.0, gt=0, description="wheel motor torque limit in [N m]")
+    cmd_vel_timeout: float = Field(default=0.5, ge=0, le=3600,
+                                   description="the wheels stop when no cmd_vel came for this long (simulated "
+                                               "time) in [s]; 0: never")
+    casters: Tags | None = Field(default=None, description="space-separated URDF links that roll or slide on the "
+                                                           "floor besides the wheels; default: the links whose "
+                                                           "name contains 'caster'")
 
 
 class Lidar(_Model):
@@ -157,7 +172,8 @@ class Gripper(_Model):
     """``<gripper>``: a part that can grasp graspable objects within ``grasp_radius``."""
 
     part: str = Field(description="URDF link that holds grasped objects")
-    grasp_radius: float = Field(default=0.1, gt=0, le=2, description="max distance part origin to object [m]")
+    grasp_radius: float = Field(default=0.1, gt=0, le=2,
+                                description="max distance part origin to object's centre of mass [m]")
     side: Literal["left", "right"] | None = Field(default=None,
                                                   description="which arm, for sig_ros 'arm' names")
 
@@ -293,10 +309,15 @@ class World(_Model):
     agents: tuple[AgentModel, ...] = ()
     source: Path = Path("<memory>")
     _locations: dict[tuple[str, str | None], tuple[int, int]] = PrivateAttr(default_factory=dict)
+    _urdfs: UrdfFiles = PrivateAttr(default_factory=UrdfFiles)
 
     def location(self, agent: str, attribute: str | None = None) -> tuple[int, int]:
         """``(line, column)`` of an agent's element (or of one of its attributes); (0, 0) if unknown."""
         return self._locations.get((agent, attribute), self._locations.get((agent, None), (0, 0)))
+
+    def record_locations(self, locations: dict[tuple[str, str | None], tuple[int, int]]) -> None:
+        """Remember where each agent's element and attributes are in the file (the parser calls this)."""
+        self._locations.update(locations)
 
     @property
     def base_dir(self) -> Path:
@@ -322,6 +343,29 @@ class World(_Model):
     def plugin(self, name: str) -> PluginConfig | None:
         """The ``<plugin name=...>`` entry, if enabled."""
         return next((p for p in self.plugins if p.name == name), None)
+
+    def urdf(self, what: str | Path) -> UrdfDocument:
+        """The parsed URDF of agent ``what`` (a name) or of file ``what`` (a ``Path``, relative to the world
+        file's directory), shared by everyone: each file is read and parsed once per world (by the parser, or
+        here on first use). Users that rewrite it take :meth:`UrdfDocument.copy_root`.
+
+        Raises:
+            KeyError: no agent ``what``, or it has no URDF; the message lists the agents that have one.
+            UrdfError: the file cannot be read or is not XML.
+        """
+        if isinstance(what, Path):
+            return self._urdfs.get(self.resolve(what))
+        with_urdf = [a.name for a in self.agents if isinstance(a, Robot | Object) and a.urdf is not None]
+        agent = next((a for a in self.agents if a.name == what), None)
+        if agent is None:
+            raise KeyError(f"no agent '{what}'; agents with a URDF: {', '.join(with_urdf) or 'none'}")
+        if not isinstance(agent, Robot | Object) or agent.urdf is None:
+            raise KeyError(f"agent '{what}' has no URDF; agents with one: {', '.join(with_urdf) or 'none'}")
+        return self._urdfs.get(self.resolve(agent.urdf))
+
+    def share_urdfs(self, files: UrdfFiles) -> None:
+        """Use the URDF documents ``files`` already read (the parser calls this, so files are read once)."""
+        self._urdfs = files
 
 
 def valid_name(name: str) -> bool:

@@ -26,7 +26,7 @@ from .models import (
     Robot,
     World,
 )
-from .urdf import UrdfError, UrdfModel, read_urdf
+from .urdf import UrdfError, UrdfFiles, UrdfModel
 
 _AGENTS: dict[str, type[BaseModel]] = {"robot": Robot, "object": Object, "human": Human, "agent": BareAgent}
 _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
@@ -38,7 +38,7 @@ _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
     "gains": (Gains, "gains", False),
 }
 _INTERNAL_FIELDS = {"kind", "lidars", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
-                    "config", "line"}
+                    "config", "line", "column", "positions"}
 _LIBXML_POSITION = re.compile(r", line \d+, column \d+$")
 
 
@@ -48,6 +48,7 @@ class _Reader:
         self.map = SourceMap(text, root)
         self.issues: list[WorldIssue] = []
         self.locations: dict[tuple[str, str | None], tuple[int, int]] = {}
+        self.urdfs = UrdfFiles()
 
     def issue(self, element: etree._Element, attribute: str | None, message: str) -> None:
         line, col = self.map.attribute(element, attribute) if attribute else self.map.element(element)
@@ -145,7 +146,8 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
                                        "plugins": tuple(p for _, p in plugins), "source": path})
     if reader.issues or world is None:
         raise WorldError(sorted(reader.issues, key=lambda i: (i.line, i.column)))
-    world._locations.update(reader.locations)
+    world.record_locations(reader.locations)
+    world.share_urdfs(reader.urdfs)
     return world
 
 
@@ -173,7 +175,9 @@ def _plugin(reader: _Reader, element: etree._Element) -> PluginConfig | None:
                                     "e.g. 'slam')")
         return None
     try:
-        return PluginConfig(name=name, config=attrs, line=reader.line(element))
+        line, column = reader.map.element(element)
+        positions = {str(k): reader.map.attribute(element, str(k)) for k in element.attrib}
+        return PluginConfig(name=name, config=attrs, line=line, column=column, positions=positions)
     except ValidationError as e:
         for err in e.errors():
             reader.issue(element, "name", message(PluginConfig, err, name))
@@ -237,7 +241,7 @@ def _check_files(reader: _Reader, element: etree._Element, base: Path,
             reader.issue(element, attr, f"file not found: {file}{relative}")
         elif attr == "urdf":
             try:
-                urdf = read_urdf(file)
+                urdf = reader.urdfs.get(file).model
             except UrdfError as e:
                 reader.issue(element, attr, f"invalid URDF: {e}")
                 continue
@@ -254,6 +258,10 @@ def _check_robot(reader: _Reader, urdf: UrdfModel, file: str, children: dict[str
             if joint not in movable:
                 reader.issue(child, attr, f"no movable joint '{joint}' in {file}; "
                                           f"valid: {', '.join(movable)}")
+        unknown_casters = [link for link in drive.casters or () if link not in urdf.links]
+        if unknown_casters:
+            reader.issue(child, "casters", f"no link {', '.join(repr(c) for c in unknown_casters)} in {file}; "
+                                           f"valid: space-separated links among {', '.join(urdf.links)}")
     checks = (("lidars", "link"), ("grippers", "part"), ("arms", "base"), ("arms", "tip"))
     for field, attr in checks:
         for child, value in children[field]:

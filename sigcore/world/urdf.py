@@ -1,15 +1,23 @@
-"""A small URDF reader: the link and joint names and the kinematic tree, for validation and the agent API.
+"""URDF files read once per world: the parsed document shared by everyone, and its link and joint names.
 
-Physics engines load the URDF themselves; this only gives the core the names it must check requests against.
+:class:`UrdfDocument` holds a file's text and parsed tree (read once; users that rewrite it take a copy), and
+:class:`UrdfModel`, the names and kinematic tree the core checks requests against. :class:`UrdfFiles` is a
+world's set of documents, one per file (``World.urdf``); the backends and features take the document from there
+instead of reading the file again.
 """
 
 from __future__ import annotations
 
+import copy
+import os
 import re
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 from lxml import etree
+
+from ..errors import SigcoreError
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
@@ -55,7 +63,7 @@ class UrdfModel:
         raise KeyError(f"no joint '{name}'; joints: {', '.join(j.name for j in self.movable_joints)}")
 
 
-class UrdfError(ValueError):
+class UrdfError(SigcoreError, ValueError):
     """A URDF file could not be read; ``line`` is its line (0 when unknown)."""
 
     def __init__(self, path: Path, line: int, message: str) -> None:
@@ -63,19 +71,109 @@ class UrdfError(ValueError):
         super().__init__(f"{path}:{line}: {message}")
 
 
+PARSER_OPTIONS: dict[str, bool] = {"resolve_entities": False, "no_network": True}
+"""lxml parser settings for URDF files: no entity expansion, no network access."""
+
+
+@dataclass(frozen=True, eq=False)
+class UrdfDocument:
+    """One URDF file, read and parsed once and shared by the core, the backends and the features.
+
+    Make one with :meth:`read`; a world hands them out with :meth:`sigcore.world.World.urdf`.
+
+    Attributes:
+        path: The file, as it was asked for (normalised).
+        text: Its content, decoded with the encoding its XML declaration names (UTF-8 if none).
+    """
+
+    path: Path
+    text: str
+    _root: etree._Element = field(repr=False)
+
+    @classmethod
+    def read(cls, path: Path) -> UrdfDocument:
+        """Read and parse the URDF file at ``path`` (no entity expansion, no network).
+
+        Raises:
+            UrdfError: the file cannot be read or is not XML.
+        """
+        try:
+            data = path.read_bytes()
+        except OSError as err:
+            raise UrdfError(path, 0, f"cannot read: {err}") from None
+        try:
+            root = etree.fromstring(data, etree.XMLParser(**PARSER_OPTIONS), base_url=str(path))
+        except etree.XMLSyntaxError as err:
+            msg = re.sub(r", line \d+, column \d+$", "", str(err.msg))
+            raise UrdfError(path, err.lineno or 0, f"not valid XML: {msg}") from None
+        encoding = root.getroottree().docinfo.encoding or "utf-8"
+        try:
+            text = data.decode("utf-8-sig" if encoding.lower() in ("utf-8", "utf8") else encoding)
+        except (LookupError, UnicodeDecodeError) as err:
+            raise UrdfError(path, 0, f"cannot decode as {encoding}: {err}") from None
+        return cls(path, text, root)
+
+    @property
+    def root(self) -> etree._Element:
+        """The parsed ``<robot>`` element, shared by every user: read it, never change it (see
+        :meth:`copy_root`)."""
+        return self._root
+
+    def copy_root(self) -> etree._Element:
+        """A deep copy of :attr:`root`, for a user that rewrites the URDF (e.g. a backend resolving meshes)."""
+        return copy.deepcopy(self._root)
+
+    @cached_property
+    def model(self) -> UrdfModel:
+        """The link and joint names and the kinematic tree (checked on first use).
+
+        Raises:
+            UrdfError: the root is not ``<robot>``, or the links and joints are not one consistent tree.
+        """
+        return _names(self.path, self._root)
+
+
+class UrdfFiles:
+    """The URDF documents of one world, by file: each file is read and parsed on first use, then shared."""
+
+    def __init__(self) -> None:
+        self._documents: dict[Path, UrdfDocument] = {}
+
+    def get(self, path: Path) -> UrdfDocument:
+        """The document of the file at ``path``, read now if it was not read before.
+
+        Raises:
+            UrdfError: the file cannot be read or is not XML (not remembered: a later call tries again).
+        """
+        key = Path(os.path.abspath(path))
+        document = self._documents.get(key)
+        if document is None:
+            document = self._documents[key] = UrdfDocument.read(Path(os.path.normpath(path)))
+        return document
+
+    @property
+    def paths(self) -> tuple[Path, ...]:
+        """The files read so far (absolute), in the order they were read."""
+        return tuple(self._documents)
+
+    def __eq__(self, other: object) -> bool:
+        """Always equal to another ``UrdfFiles``: a cache of file contents does not tell two worlds apart."""
+        return isinstance(other, UrdfFiles)
+
+    __hash__ = None  # type: ignore[assignment]  # mutable container: not hashable
+
+
 def read_urdf(path: Path) -> UrdfModel:
-    """Read link and joint names from the URDF file at ``path``.
+    """Read link and joint names from the URDF file at ``path`` (a world shares them: :meth:`World.urdf`).
 
     Raises:
         UrdfError: the file is missing, not XML, or not a consistent tree.
     """
-    try:
-        root = etree.parse(str(path), etree.XMLParser(resolve_entities=False, no_network=True)).getroot()
-    except OSError as err:
-        raise UrdfError(path, 0, f"cannot read: {err}") from None
-    except etree.XMLSyntaxError as err:
-        msg = re.sub(r", line \d+, column \d+$", "", str(err.msg))
-        raise UrdfError(path, err.lineno or 0, f"not valid XML: {msg}") from None
+    return UrdfDocument.read(path).model
+
+
+def _names(path: Path, root: etree._Element) -> UrdfModel:
+    """The names model of the parsed URDF ``root`` read from ``path``; ``UrdfError`` if it is inconsistent."""
     if root.tag != "robot":
         raise UrdfError(path, root.sourceline or 0, f"root element is <{root.tag}>, expected <robot>")
     links = tuple(str(e.get("name")) for e in root.findall("link"))

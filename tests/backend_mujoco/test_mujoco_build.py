@@ -35,12 +35,11 @@ def test_registered_as_mujoco() -> None:
 
 def test_urdf_link_friction(make_world, build, tmp_path: Path) -> None:
     """Link friction comes from <gazebo><mu1> or PyBullet's <contact><lateral_friction>; 0 is frictionless."""
-    world = make_world(robot())
     urdf = (tmp_path / "bot.urdf").read_text()
     contact = '<contact><lateral_friction value="0.3"/></contact>'
     urdf = urdf.replace('<link name="hand">', '<link name="hand">' + contact)
     (tmp_path / "bot.urdf").write_text(urdf)
-    b = build(world)
+    b = build(make_world(robot()))  # the world reads its URDFs once, when parsed
     geom = {link: int(np.flatnonzero(b.model.geom_bodyid == b.model.body(f"bot/{link}").id)[0])
             for link in ("caster_f", "hand", "arm_1")}
     assert b.model.geom_friction[geom["caster_f"], 0] == 0.0

@@ -237,21 +237,21 @@ def test_fixed_robot_stays(make_world, build) -> None:
 
 def test_missing_collision_mesh_names_entity(make_world, build, tmp_path: Path) -> None:
     """A URDF collision mesh that does not exist is a BackendError naming the robot and the file."""
-    world = make_world(robot())
     (tmp_path / "bot.urdf").write_text((tmp_path / "bot.urdf").read_text().replace(
         '<geometry><box size="0.4 0.3 0.1"/></geometry>',
         '<geometry><mesh filename="meshes/nope.stl"/></geometry>'))
+    world = make_world(robot())  # the world reads its URDFs once, when parsed
     with pytest.raises(BackendError, match=r"robot 'bot'.*meshes/nope\.stl"):
         build(world)
 
 
 def test_massless_moving_link_names_entity(make_world, build, tmp_path: Path) -> None:
     """A movable link without <inertial> is a BackendError naming the robot and saying what to add."""
-    world = make_world(robot())
     urdf = (tmp_path / "bot.urdf").read_text()
     start = urdf.index('<link name="wheel_l">')
     end = urdf.index("</inertial>", start) + len("</inertial>")
     (tmp_path / "bot.urdf").write_text(urdf[:start] + '<link name="wheel_l">' + urdf[end:])
+    world = make_world(robot())  # the world reads its URDFs once, when parsed
     with pytest.raises(BackendError, match=r"robot 'bot'.*<inertial>"):
         build(world)
 

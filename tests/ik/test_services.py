@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -11,6 +12,9 @@ import pytest
 from sigcore.api.call import call_and_wait
 from sigcore.api.table import ApiEntry
 from sigcore.sim import Simulation
+from sigcore.world import WorldError, parse_world
+
+WORLDS = Path(__file__).parent.parent.parent / "worlds"
 
 
 def _entry(sim: Simulation, suffix: str) -> ApiEntry:
@@ -128,17 +132,21 @@ def test_newer_request_supersedes_a_move(arm6_sim: Simulation) -> None:
     assert done is not None and not done["success"] and "newer target" in done["message"]
 
 
-def test_feature_config_errors(arm6_world) -> None:
-    """Unknown attributes and non-robot agents are world errors naming the attribute and the valid values."""
-    from sigcore_ik import IkFeature
-
-    sim = Simulation(arm6_world, "mujoco")
-    with pytest.raises(ValueError, match="unknown attribute 'speed'; valid: agent, max_joint_speed"):
-        IkFeature(sim, {"speed": "2"})
-    with pytest.raises(ValueError, match="agent: 'man_0' is not a robot.*robots: arm_0"):
-        IkFeature(sim, {"agent": "man_0"})
-    with pytest.raises(ValueError, match="max_joint_speed"):
-        IkFeature(sim, {"max_joint_speed": "-1"})
+@pytest.mark.parametrize(("attributes", "column", "expected"), [
+    ('agent="arm_0" speed="2"', 35, "unknown attribute of plugin 'ik'; valid: name, agent, max_joint_speed"),
+    ('agent="man_0"', 21, "'man_0' is not a robot of the world; robots: arm_0"),
+    ('agent="arm_0" max_joint_speed="-1"', 35, "'-1' is out of range; valid: 0 < max_joint_speed <= 100 [rad/s]"),
+    ('agent="arm_0" max_joint_speed="fast"', 35, "'fast' is not a number; valid: a number"),
+])
+def test_feature_config_errors(attributes: str, column: int, expected: str) -> None:
+    """Bad <plugin name="ik"> attributes are world errors at their line:column naming what is valid."""
+    text = WORLDS.joinpath("arm6.xml").read_text().replace('<plugin name="ik" agent="arm_0"/>',
+                                                           f'<plugin name="ik" {attributes}/>')
+    text = text.replace("</world>", '  <agent name="man_0"/>\n</world>')
+    with pytest.raises(WorldError) as info:
+        Simulation(parse_world(WORLDS / "arm6.xml", text), "mujoco")
+    [issue] = info.value.issues
+    assert (issue.line, issue.column) == (8, column) and expected in issue.message
 
 
 def test_services_without_the_feature(core_world) -> None:
@@ -165,3 +173,56 @@ def test_reset_ends_a_move(arm6_sim: Simulation) -> None:
     done = finish(sim, entry, "arm_0", pending)  # type: ignore[arg-type]
     assert done is not None and not done["success"] and "simulation reset" in done["message"]
     assert sim.features["ik"].motions == {}  # type: ignore[attr-defined]
+
+
+def test_unreachable_answer_carries_the_residual_and_closest_joints(arm6_sim: Simulation) -> None:
+    """A failed solve answers the real residual and the closest configuration found, not zeros."""
+    res = _solve(arm6_sim, "arm_0", x=3.0, y=0.0, z=0.6)
+    assert not res["success"]
+    residual = float(re.search(r"residual ([0-9.e-]+) m", res["message"]).group(1))  # type: ignore[union-attr]
+    assert res["solver_error"] == pytest.approx(residual, rel=1e-3) and res["solver_error"] > 1.5
+    assert res["joint_names"] == _solve(arm6_sim, "arm_0", x=0.4, z=0.5)["joint_names"]  # the chain's joints
+    assert len(res["joint_positions"]) == 6 and any(a != 0.0 for a in res["joint_positions"])
+    assert res["final_error"] == -1.0  # nothing moved
+
+
+def test_move_within_tolerance_succeeds_while_a_joint_still_moves(arm6_sim: Simulation) -> None:
+    """A move judged at its timeout with the tip within the 5 mm move tolerance succeeds even though a joint is
+    still faster than the settle speed (it used to fail as 'did not settle')."""
+    from sigcore_ik.feature import MOVE_TOLERANCE
+    from sigcore_ik.motion import SETTLED_SPEED, duration_for
+
+    sim = arm6_sim
+    target = {"x": 0.4, "y": 0.2, "z": 0.5, "qx": 1.0}
+    plan = _solve(sim, "arm_0", **target)
+    start = np.array([sim.backend.get_joint_angle("arm_0", j) for j in plan["joint_names"]])
+    duration = duration_for(start, np.array(plan["joint_positions"]), 1.0)
+    # judged 0.1 s before the trajectory ends: about 2 mm from the target and still moving (measured: 0.04 rad/s)
+    res = _solve(sim, "arm_0", **target, move=True, timeout=duration - 0.1)
+    assert res["success"], res["message"]
+    assert 0 < res["final_error"] <= MOVE_TOLERANCE
+    speeds = [abs(sim.backend.get_joint_velocity("arm_0", j)) for j in res["joint_names"]]
+    assert max(speeds) > SETTLED_SPEED
+
+
+def test_move_that_stops_short_fails_with_where_it_got(arm6_world) -> None:
+    """An arm too weak to reach the target (8 N m motors) stops short: success false, the measured tip error and
+    the joint angles reached in the answer (it used to answer success once the arm stood still)."""
+    text = WORLDS.joinpath("arm6.xml").read_text().replace('max_torque="150"', 'max_torque="8"')
+    sim = Simulation(parse_world(WORLDS / "arm6.xml", text), "mujoco")
+    res = _solve(sim, "arm_0", x=0.4, y=0.2, z=0.5, qx=1.0, move=True)
+    assert not res["success"] and "stopped short" in res["message"]
+    tip = sim.backend.get_pose("arm_0", "tool0")[0]
+    assert res["final_error"] == pytest.approx(float(np.linalg.norm(tip - [0.4, 0.2, 0.5])), abs=1e-3)
+    assert res["final_error"] > 0.05 and res["solver_error"] <= 1e-4
+    reached = [sim.backend.get_joint_angle("arm_0", j) for j in res["joint_names"]]
+    np.testing.assert_allclose(res["joint_positions"], reached, atol=1e-3)
+
+
+def test_pre_grasp_example_of_the_docs(cleanup_sim: Simulation) -> None:
+    """docs/ik.md's pre-grasp (hand down 10 cm above a can 0.5 m ahead, then 3 cm above it) succeeds within 5 mm."""
+    sim = cleanup_sim
+    for z in (0.86, 0.79):
+        res = _solve(sim, "robot_000", x=0.5, y=0.2, z=z, qw=1.0, frame="base_link", chain="left", move=True)
+        assert res["success"] and res["final_error"] <= 5e-3, res["message"]
+        assert res["solver_error"] <= 1e-4

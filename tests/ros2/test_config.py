@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -10,7 +11,11 @@ pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importabl
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
 from rosproc import WORLD, start_sim  # noqa: E402
-from sigcore_ros2.config import Ros2Config, parse_qos  # noqa: E402
+from sigcore_ros2.config import Ros2Config, config_for, parse_qos  # noqa: E402
+
+from sigcore.sim import Simulation  # noqa: E402
+from sigcore.world import WorldError, parse_world  # noqa: E402
+from sigcore.world.plugin_config import validate_plugin  # noqa: E402
 
 
 def test_qos_overrides_parse() -> None:
@@ -20,17 +25,31 @@ def test_qos_overrides_parse() -> None:
     assert qos["/bot/scan"].transient_local is True and qos["/bot/scan"].depth == 0
 
 
-@pytest.mark.parametrize(("attrs", "match"), [
-    ({"qos": "/clock: fast"}, "unknown word 'fast'.*valid: reliable"),
-    ({"qos": "/clock best_effort"}, "is not 'TOPIC: WORDS'"),
-    ({"clock_rte": "10"}, "unknown attribute.*clock_rte.*valid: clock_rate"),
-    ({"state_rate": "0"}, "state_rate"),
-    ({"sim_prefix": "sim space"}, "not a ROS namespace"),
+@pytest.mark.parametrize(("attribute", "match"), [
+    ('qos="/clock: fast"', "unknown word 'fast' for /clock; valid: reliable"),
+    ('qos="/clock best_effort"', "is not 'TOPIC: WORDS'"),
+    ('clock_rte="10"', r"unknown attribute of plugin 'ros2' \(did you mean 'clock_rate'\?\); valid: name, clock_rate"),
+    ('state_rate="0"', r"'0' is out of range; valid: state_rate > 0 \[Hz\]"),
+    ('sim_prefix="sim space"', "not a ROS namespace"),
+    ('standard="maybe"', "'maybe' is not a boolean; valid: true, false"),
 ])
-def test_bad_settings_are_refused_with_what_is_valid(attrs: dict[str, str], match: str) -> None:
-    """A bad attribute names itself and what would be valid."""
-    with pytest.raises(ValueError, match=match):
-        Ros2Config.from_attributes(attrs)
+def test_bad_settings_are_refused_with_what_is_valid(tmp_path: Path, attribute: str, match: str) -> None:
+    """A bad attribute is reported at its line:column, naming itself and what would be valid."""
+    world = tmp_path / "world.xml"
+    world.write_text(f'<world name="w">\n  <plugin name="ros2" clock_rate="10" {attribute}/>\n</world>\n')
+    with pytest.raises(WorldError) as info:
+        validate_plugin(parse_world(world), parse_world(world).plugins[0], Ros2Config)
+    [issue] = info.value.issues
+    assert (issue.line, issue.column, issue.attribute) == (2, 39, attribute.split("=")[0])
+    assert re.search(match, issue.message), issue.message
+
+
+def test_config_for_reads_the_world_element(tmp_path: Path) -> None:
+    """The transport's settings are the world's <plugin name="ros2"> element through the same model."""
+    world = tmp_path / "world.xml"
+    world.write_text('<world name="w">\n  <plugin name="ros2" clock_rate="25" sigros="false"/>\n</world>\n')
+    config = config_for(Simulation(parse_world(world), "mujoco"))
+    assert (config.clock_rate, config.sigros, config.standard) == (25.0, False, True)
 
 
 def test_world_settings_change_qos_rates_and_prefix(tmp_path: Path) -> None:

@@ -109,22 +109,26 @@ def test_scans_without_returns_keep_the_pose(room_sim: Simulation) -> None:
     assert math.hypot(state.map_to_base.x - before.map_to_base.x, state.map_to_base.y - before.map_to_base.y) < 0.01
 
 
-@pytest.mark.parametrize(("attributes", "expected"), [
-    ('agent="robot_000" voxel_size="-0.2"', "attribute 'voxel_size'"),
-    ('agent="robot_000" resolution="fine"', "attribute 'resolution'"),
-    ('agent="robot_000" size="10"', "attribute 'size'"),
-    ('agent="robot_000" odometry_guess="maybe"', "attribute 'odometry_guess'"),
-    ('agent="robot_000" voxel="0.2"', "unknown attribute(s) 'voxel'; valid: agent, lidar, voxel_size"),
-    ('agent="nobody"', "'nobody' is not a robot of this world; robots: robot_000"),
-    ('agent="robot_000" lidar="front"', "has no lidar 'front'; lidars: base_scan"),
-    ('voxel_size="0.2"', "attribute 'agent'"),
+@pytest.mark.parametrize(("attributes", "column", "expected"), [
+    ('agent="robot_000" voxel_size="-0.2"', 41, "attribute 'voxel_size': '-0.2' is out of range; valid: 0 < "
+                                                "voxel_size <= 5 [m]"),
+    ('agent="robot_000" resolution="fine"', 41, "attribute 'resolution': 'fine' is not a number"),
+    ('agent="robot_000" size="10"', 41, "attribute 'size': expected two numbers 'a b', got '10'"),
+    ('agent="robot_000" size="2000 2000"', 41, "attribute 'size': size '2000 2000' at resolution 0.05 is"),
+    ('agent="robot_000" odometry_guess="maybe"', 41, "attribute 'odometry_guess': 'maybe' is not a boolean"),
+    ('agent="robot_000" voxel="0.2"', 41, "unknown attribute of plugin 'slam' (did you mean 'voxel_size'?); "
+                                          "valid: name, agent, lidar, voxel_size"),
+    ('agent="nobody"', 23, "attribute 'agent': 'nobody' is not a robot of this world; robots: robot_000"),
+    ('agent="robot_000" lidar="front"', 41, "attribute 'lidar': robot 'robot_000' has no lidar 'front'; "
+                                            "lidars: base_scan"),
+    ('voxel_size="0.2"', 3, "<plugin>: required attribute 'agent' is missing"),
 ])
-def test_invalid_config_is_a_world_error(attributes: str, expected: str) -> None:
-    """Each bad attribute is reported in a WorldError that names it and what is valid."""
+def test_invalid_config_is_a_world_error(attributes: str, column: int, expected: str) -> None:
+    """Each bad attribute is reported at its line:column in a WorldError that names it and what is valid."""
     with pytest.raises(WorldError) as info:
         Simulation(room_world(f'  <plugin name="slam" {attributes}/>\n'), "mujoco")
+    assert f"box_room.xml:8:{column}: " in str(info.value)  # the <plugin> line, the attribute's column
     assert expected in str(info.value)
-    assert "box_room.xml:8" in str(info.value)  # the <plugin> line
 
 
 def test_world_without_the_plugin_pays_nothing() -> None:

@@ -2,45 +2,46 @@
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING
 
-from sigcore.feature import Feature
+from pydantic import Field, field_validator
+
+from sigcore.feature import Feature, FeatureConfig
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
 
-ATTRIBUTES = ("greeting", "period")
+
+class HelloConfig(FeatureConfig):
+    """The attributes of ``<plugin name="hello">``; sigcore validates them and reports each problem located."""
+
+    greeting: str = Field(description="the text to broadcast, not blank")
+    period: float = Field(default=1.0, gt=0.0, description="time between two greetings in [s]")
+
+    @field_validator("greeting")
+    @classmethod
+    def _not_blank(cls, value: str) -> str:
+        if not value.strip():
+            raise ValueError("the greeting is blank; valid: some text, e.g. 'hi'")
+        return value
 
 
 class HelloFeature(Feature):
     """Counts the simulation's steps and broadcasts ``greeting`` to every agent each ``period`` seconds.
 
-    World attributes:
+    World attributes (:class:`HelloConfig`):
         greeting: The text to broadcast (required, not blank).
         period: Time between two greetings [s], > 0 (default 1). The first greeting goes out after one period.
     """
 
     name = "hello"
+    config_model = HelloConfig
     SENDER = "hello"
     """Sender name of the greetings (not an agent, so every agent receives them)."""
 
-    def __init__(self, sim: Simulation, config: dict[str, str]) -> None:
-        unknown = sorted(set(config) - set(ATTRIBUTES))
-        if unknown:
-            raise ValueError(f"unknown attribute '{unknown[0]}'; valid attributes: {', '.join(ATTRIBUTES)}")
-        if "greeting" not in config:
-            raise ValueError("attribute 'greeting' is required, e.g. greeting=\"hi\"")
-        self.greeting = config["greeting"]
-        if not self.greeting.strip():
-            raise ValueError("attribute 'greeting' must not be blank")
-        text = config.get("period", "1")
-        try:
-            self.period = float(text)
-        except ValueError:
-            raise ValueError(f"attribute 'period' must be a number of seconds, got '{text}'") from None
-        if not (math.isfinite(self.period) and self.period > 0):
-            raise ValueError(f"attribute 'period' must be > 0 [s], got '{text}'")
+    def __init__(self, sim: Simulation, config: HelloConfig) -> None:
+        self.greeting = config.greeting
+        self.period = config.period
         self.steps = 0
         self.sent = 0
         self._next = self.period

@@ -15,13 +15,12 @@ No visual shapes are made: the client runs in ``DIRECT`` mode and sigcore render
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import pybullet as pb
 
 from sigcore.backend import MAIN, BackendError
 from sigcore.world.models import Human, Object, Robot, World
-from sigcore.world.urdf import UrdfError, read_urdf
+from sigcore.world.urdf import UrdfDocument, UrdfError
 
 from .frames import quat_from_rpy
 from .layout import BASE, GROUP_STATIC, MASK_STATIC, EntityIndex, JointIndex
@@ -94,16 +93,24 @@ def _scale_mass(client: int, e: EntityIndex, mass: float) -> None:
                               physicsClientId=client)
 
 
-def _load_urdf(client: int, path: Path, what: str, pose_xyz: tuple[float, float, float],
+def _document(world: World, entity: str, what: str) -> UrdfDocument:
+    """The world's shared URDF of ``entity``; ``BackendError`` naming the entity if it cannot be read."""
+    try:
+        return world.urdf(entity)
+    except UrdfError as e:
+        raise BackendError(f"{what}: {e}") from None
+
+
+def _load_urdf(client: int, urdf: UrdfDocument, what: str, pose_xyz: tuple[float, float, float],
                rpy: tuple[float, float, float], fixed: bool, scale: float = 1.0) -> tuple[int, dict[str, float],
                                                                                        frozenset[str]]:
-    prepared = prepare_urdf(path, what, floating=not fixed)
+    prepared = prepare_urdf(urdf, what, floating=not fixed)
     tmp = write_temp(prepared.text)
     try:
         body = pb.loadURDF(tmp, list(pose_xyz), quat_from_rpy(*rpy), useFixedBase=fixed, flags=_URDF_FLAGS,
                            globalScaling=scale, physicsClientId=client)
     except pb.error as err:
-        raise BackendError(f"{what}: PyBullet cannot load URDF {path}: {err}") from None
+        raise BackendError(f"{what}: PyBullet cannot load URDF {urdf.path}: {err}") from None
     finally:
         os.unlink(tmp)
     return body, prepared.friction, prepared.massless
@@ -126,12 +133,12 @@ def _friction(client: int, body: int, links: dict[str, int], friction: dict[str,
 # ---------------------------------------------------------------------------------------------------- robots
 def _add_robot(client: int, world: World, robot: Robot) -> EntityIndex:
     what = f"robot '{robot.name}'"
-    path = world.resolve(robot.urdf)
+    document = _document(world, robot.name, what)
     try:
-        urdf = read_urdf(path)
+        urdf = document.model
     except UrdfError as e:
         raise BackendError(f"{what}: {e}") from None
-    body, friction, _ = _load_urdf(client, path, what, robot.pose.xyz, robot.pose.rpy, robot.fixed)
+    body, friction, _ = _load_urdf(client, document, what, robot.pose.xyz, robot.pose.rpy, robot.fixed)
     links = _link_names(client, body)
     _friction(client, body, links, friction, _DEFAULT_FRICTION)
     n = pb.getNumJoints(body, physicsClientId=client)
@@ -161,7 +168,7 @@ def _add_robot(client: int, world: World, robot: Robot) -> EntityIndex:
 def _add_urdf_object(client: int, world: World, obj: Object) -> EntityIndex:
     assert obj.urdf is not None
     what = f"object '{obj.name}'"
-    body, friction, _ = _load_urdf(client, world.resolve(obj.urdf), what, obj.pose.xyz, obj.pose.rpy,
+    body, friction, _ = _load_urdf(client, _document(world, obj.name, what), what, obj.pose.xyz, obj.pose.rpy,
                                    obj.static, obj.scale)
     links = _link_names(client, body)
     _friction(client, body, links, friction, obj.friction)

@@ -1,4 +1,6 @@
-"""URDF files prepared for ``pybullet.loadURDF``: meshes resolved, visuals dropped, massless links made so.
+"""URDF documents prepared for ``pybullet.loadURDF``: meshes resolved, visuals dropped, massless links made so.
+
+The preparations work on a copy of the world's shared parsed URDF (``World.urdf``: the file is not read again).
 
 * ``<visual>`` elements are removed (physics needs collision geometry; visual meshes are often ``.dae``).
 * Collision ``<mesh filename>`` paths are made absolute, with the MuJoCo backend's rules (relative to the
@@ -15,12 +17,11 @@ from __future__ import annotations
 import os
 import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 from lxml import etree
 
 from sigcore.backend import BackendError
-from sigcore.world.urdf import link_friction, resolve_mesh
+from sigcore.world.urdf import UrdfDocument, link_friction, resolve_mesh
 
 _ZERO_INERTIAL = ('<inertial><origin xyz="0 0 0"/><mass value="0"/>'
                   '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>')
@@ -43,22 +44,21 @@ class PreparedUrdf:
     massless: frozenset[str]
 
 
-def prepare_urdf(path: Path, what: str, floating: bool) -> PreparedUrdf:
-    """Read and rewrite the URDF at ``path``.
+def prepare_urdf(urdf: UrdfDocument, what: str, floating: bool) -> PreparedUrdf:
+    """Rewrite the parsed URDF ``urdf`` for PyBullet (on a copy; ``urdf`` is not changed).
 
     Args:
-        path: The URDF file.
+        urdf: The URDF document (``World.urdf``).
         what: The entity it belongs to, for messages, e.g. ``"robot 'robot_000'"``.
         floating: The root link moves freely (then it needs an ``<inertial>`` too).
 
     Raises:
-        BackendError: unreadable file, missing collision mesh, a root link called ``world``, or a moving link
-            without ``<inertial>``.
+        BackendError: missing collision mesh, a root link called ``world``, or a moving link without
+            ``<inertial>``.
     """
-    try:
-        root = etree.parse(str(path), etree.XMLParser(remove_comments=True, resolve_entities=False)).getroot()
-    except (OSError, etree.XMLSyntaxError) as e:
-        raise BackendError(f"{what}: cannot read URDF {path}: {e}") from None
+    path = urdf.path
+    root = urdf.copy_root()
+    etree.strip_tags(root, etree.Comment)
     for visual in list(root.iter("visual")):
         visual.getparent().remove(visual)
     for mesh in root.iter("mesh"):

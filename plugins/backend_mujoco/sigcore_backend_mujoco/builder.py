@@ -27,7 +27,7 @@ import numpy as np
 from sigcore.backend import BackendError
 from sigcore.geometry import quat_from_rpy
 from sigcore.world.models import Human, Object, Pose, Robot, World
-from sigcore.world.urdf import UrdfError, read_urdf
+from sigcore.world.urdf import UrdfDocument, UrdfError
 
 from .plan import (
     FREE_JOINT,
@@ -135,12 +135,12 @@ def _exclude_self(spec: mujoco.MjSpec, root: mujoco.MjsBody) -> None:
 # ---------------------------------------------------------------------------------------------------- robots
 def _add_robot(spec: mujoco.MjSpec, world: World, robot: Robot) -> EntityPlan:
     what = f"robot '{robot.name}'"
-    path = world.resolve(robot.urdf)
+    document = _document(world, robot.name, what)
     try:
-        urdf = read_urdf(path)
+        urdf = document.model
     except UrdfError as e:
         raise BackendError(f"{what}: {e}") from None
-    loaded = load_urdf(path, what)
+    loaded = load_urdf(document, what)
     root = _attach(spec, loaded.spec, robot.name, robot.pose, free=not robot.fixed)
     _style(root, loaded.friction, None)
     _exclude_self(spec, root)
@@ -162,6 +162,14 @@ def _add_robot(spec: mujoco.MjSpec, world: World, robot: Robot) -> EntityPlan:
     p = prefix(robot.name)
     parts = [(urdf.root, p + urdf.root)] + [(link, p + link) for link in urdf.links if link != urdf.root]
     return EntityPlan(robot.name, "robot", parts, free=not robot.fixed, joints=joints)
+
+
+def _document(world: World, entity: str, what: str) -> UrdfDocument:
+    """The world's shared URDF of ``entity``; ``BackendError`` naming the entity if it cannot be read."""
+    try:
+        return world.urdf(entity)
+    except UrdfError as e:
+        raise BackendError(f"{what}: {e}") from None
 
 
 def _attach(spec: mujoco.MjSpec, child: mujoco.MjSpec, name: str, pose: Pose, free: bool) -> mujoco.MjsBody:
@@ -208,7 +216,7 @@ def _add_motor(spec: mujoco.MjSpec, robot: str, joint: JointPlan) -> None:
 def _add_urdf_object(spec: mujoco.MjSpec, world: World, obj: Object) -> EntityPlan:
     assert obj.urdf is not None
     what = f"object '{obj.name}'"
-    loaded = load_urdf(world.resolve(obj.urdf), what)
+    loaded = load_urdf(_document(world, obj.name, what), what)
     root = _attach(spec, loaded.spec, obj.name, obj.pose, free=not obj.static)
     _style(root, loaded.friction, obj.friction, obj.color)
     _exclude_self(spec, root)

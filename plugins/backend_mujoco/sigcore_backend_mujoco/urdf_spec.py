@@ -1,6 +1,7 @@
-"""URDF files -> MuJoCo specs: mesh paths resolved, visuals dropped, Gazebo friction read.
+"""URDF documents -> MuJoCo specs: mesh paths resolved, visuals dropped, Gazebo friction read.
 
-MuJoCo's URDF importer is used as is, with three preparations:
+MuJoCo's URDF importer is used as is, on a copy of the world's shared parsed URDF (``World.urdf``: the file is not
+read again), with three preparations:
 
 * ``<visual>`` elements are removed: physics needs collision geometry only, and visual meshes are often in
   formats MuJoCo cannot read (``.dae``).
@@ -19,13 +20,12 @@ them.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import mujoco
 from lxml import etree
 
 from sigcore.backend import BackendError
-from sigcore.world.urdf import link_friction, resolve_mesh
+from sigcore.world.urdf import UrdfDocument, link_friction, resolve_mesh
 
 
 @dataclass(frozen=True)
@@ -43,21 +43,19 @@ class LoadedUrdf:
     friction: dict[str, float]
 
 
-def load_urdf(path: Path, what: str) -> LoadedUrdf:
-    """Read the URDF at ``path`` into a MuJoCo spec.
+def load_urdf(urdf: UrdfDocument, what: str) -> LoadedUrdf:
+    """Turn the parsed URDF ``urdf`` into a MuJoCo spec (it works on a copy; ``urdf`` is not changed).
 
     Args:
-        path: The URDF file.
+        urdf: The URDF document (``World.urdf``).
         what: The entity it belongs to, for messages, e.g. ``"robot 'robot_000'"``.
 
     Raises:
-        BackendError: unreadable file, missing collision mesh, a root link called ``world``, or a URDF MuJoCo
-            rejects.
+        BackendError: missing collision mesh, a root link called ``world``, or a URDF MuJoCo rejects.
     """
-    try:
-        root = etree.parse(str(path), etree.XMLParser(remove_comments=True, resolve_entities=False)).getroot()
-    except (OSError, etree.XMLSyntaxError) as e:
-        raise BackendError(f"{what}: cannot read URDF {path}: {e}") from None
+    path = urdf.path
+    root = urdf.copy_root()
+    etree.strip_tags(root, etree.Comment)
     for visual in list(root.iter("visual")):
         visual.getparent().remove(visual)
     for mesh in root.iter("mesh"):

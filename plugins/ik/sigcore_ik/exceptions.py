@@ -49,6 +49,9 @@ class InvalidTargetError(IkError):
 class UnreachableError(IkError):
     """The solver found no configuration within the tolerance (the target is out of reach or out of the limits).
 
+    The error response carries the closest configuration: ``joint_names``, ``joint_positions``, ``solver_error``
+    (the residual) and ``final_error`` -1 (nothing moved).
+
     Attributes:
         position_error: Residual distance of the best configuration found [m].
         rotation_error: Residual rotation angle of the best configuration [rad] (0 for position-only targets).
@@ -56,16 +59,23 @@ class UnreachableError(IkError):
     """
 
     def __init__(self, chain: str, position_error: float, rotation_error: float, tolerance: float,
-                 joint_positions: Iterable[float], position_only: bool) -> None:
+                 joint_positions: Iterable[float], position_only: bool, joint_names: Iterable[str] = ()) -> None:
         self.position_error, self.rotation_error = position_error, rotation_error
-        self.joint_positions = tuple(joint_positions)
+        self.joint_positions = tuple(float(a) for a in joint_positions)
         rot = "" if position_only else f", rotation residual {rotation_error:.3g} rad"
         super().__init__(
             f"target unreachable for arm '{chain}' within the joint limits: residual {position_error:.4g} m"
             f"{rot} (tolerance {tolerance:g} m); closest joint positions "
-            f"[{', '.join(f'{a:.4f}' for a in self.joint_positions)}]"
+            f"[{', '.join(f'{a:.4f}' for a in self.joint_positions)}]",
+            {"joint_names": list(joint_names), "joint_positions": list(self.joint_positions),
+             "solver_error": position_error, "final_error": -1.0},
         )
 
 
 class MoveError(IkError):
-    """The arm did not settle at the solution in time (blocked, overloaded, or superseded by a newer request)."""
+    """The arm did not reach the target: it stopped (blocked, overloaded) or was still off at the timeout farther
+    than the move tolerance, or a newer request or a reset superseded the move.
+
+    The error response carries where the arm got to: ``joint_positions`` (the chain's measured angles), ``final_error``
+    (the tip's measured distance from the target [m]) and ``solver_error``.
+    """

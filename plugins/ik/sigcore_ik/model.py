@@ -9,6 +9,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from sigcore.world.urdf import UrdfDocument
+
 Vector = npt.NDArray[np.float64]
 
 
@@ -17,7 +19,8 @@ class RobotModel:
     separately, so a mobile robot uses its current base pose).
 
     Args:
-        urdf: Path of the URDF file; only the kinematic tree, limits and inertias are read (no meshes).
+        urdf: The parsed URDF (``World.urdf``: the model is built from its text, the file is not read again), or
+            a URDF file to read; only the kinematic tree, limits and inertias are used (no meshes).
 
     Attributes:
         model: The Pinocchio model; its universe frame is the URDF root link frame.
@@ -25,8 +28,9 @@ class RobotModel:
         root: Name of the URDF root link.
     """
 
-    def __init__(self, urdf: Path) -> None:
-        self.model: pin.Model = pin.buildModelFromUrdf(str(urdf))
+    def __init__(self, urdf: UrdfDocument | Path) -> None:
+        document = UrdfDocument.read(urdf) if isinstance(urdf, Path) else urdf
+        self.model: pin.Model = pin.buildModelFromXML(document.text)
         self.data: pin.Data = self.model.createData()
         self.root: str = self.model.frames[1].name if len(self.model.frames) > 1 else "universe"
         self._joint_ids = {self.model.names[i]: i for i in range(1, self.model.njoints)}

@@ -35,7 +35,7 @@ class RobotIk:
     def __init__(self, sim: Simulation, name: str) -> None:
         self.sim, self.name = sim, name
         spec = sim.robot_model(name)
-        self.model = RobotModel(sim.world.resolve(spec.urdf))
+        self.model = RobotModel(sim.world.urdf(name))
         sides = {g.part: g.side for g in spec.grippers}
         if spec.arms:
             self.chains = [build_chain(self.model, a.name, a.base, a.tip, sides.get(a.tip)) for a in spec.arms]

@@ -12,7 +12,7 @@ from sigcore.api.table import ROBOT, ApiEntry
 
 from . import types as t
 from .exceptions import InvalidTargetError
-from .feature import IkFeature, finite
+from .feature import MOVE_TOLERANCE, IkFeature, finite
 from .robot import se3
 
 if TYPE_CHECKING:
@@ -77,7 +77,7 @@ def ik_solve(sim: Simulation, agent: str, req: Any) -> dict[str, Any] | Deferred
                               "solver_error": result.position_error}
     if not req.move:
         return {**answer, "final_error": -1.0}
-    return f.move(agent, chain, result.angles, target, timeout, answer)
+    return f.move(agent, chain, result.angles, target, timeout, answer, tolerance=max(tolerance, MOVE_TOLERANCE))
 
 
 def entries() -> list[ApiEntry]:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+from sigcore.errors import SigcoreError
+
 SHOULDER_Y = 0.20
 """Shoulders at (0, ±0.20, 1.15) in the base frame [m]."""
 SHOULDER_Z = 1.15
@@ -22,7 +24,7 @@ TUCK = (0.0, 0.4, 2.4, -2.1, 0.0)
 Pose = tuple[float, float, float, float, float]
 
 
-class UnreachableError(ValueError):
+class UnreachableError(SigcoreError, ValueError):
     """No arm pose puts the hand there pointing down; the message gives the point and the reason."""
 
 

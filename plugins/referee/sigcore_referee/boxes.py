@@ -1,4 +1,5 @@
-"""Trash boxes: the inner volume of a box (read from its URDF, or given) and the point-in-box test."""
+"""Trash boxes: the inner volume of a box (from its URDF, shared by the world, or given) and the point-in-box
+test."""
 
 from __future__ import annotations
 
@@ -7,9 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
-from lxml import etree
 
 from sigcore.geometry import quat_conj, quat_rotate
+from sigcore.world.urdf import UrdfDocument, UrdfError
 
 from .exceptions import BoxGeometryError
 
@@ -48,11 +49,8 @@ def _numbers(text: str | None, n: int, default: str) -> tuple[float, ...]:
     return values
 
 
-def _collision_boxes(box: str, urdf: Path, scale: float) -> list[Bounds]:
-    try:
-        root = etree.parse(str(urdf), etree.XMLParser(resolve_entities=False, no_network=True)).getroot()
-    except (OSError, etree.XMLSyntaxError) as e:
-        raise BoxGeometryError(box, f"cannot read {urdf}: {e}") from None
+def _collision_boxes(box: str, document: UrdfDocument, scale: float) -> list[Bounds]:
+    root, urdf = document.root, document.path  # the shared tree: only read here
     links = root.findall("link")
     if len(links) != 1:
         raise BoxGeometryError(box, f"{urdf} has {len(links)} links; only one-link boxes are read")
@@ -79,15 +77,26 @@ def _collision_boxes(box: str, urdf: Path, scale: float) -> list[Bounds]:
     return boxes
 
 
-def inner_volume(box: str, urdf: Path, scale: float = 1.0) -> Bounds:
+def inner_volume(box: str, urdf: UrdfDocument | Path, scale: float = 1.0) -> Bounds:
     """The empty volume of an open-top box model made of axis-aligned collision boxes (a floor and walls).
 
     Seen from the centre of the model's footprint: the floor is the part under the centre, the walls are the
     nearest parts on each side; the volume goes from the floor's top to the highest wall top (the rim).
 
+    Args:
+        box: The box's entity name, for messages.
+        urdf: Its parsed URDF (``World.urdf``, not read again), or a URDF file to read.
+        scale: The object's scale factor.
+
     Raises:
-        BoxGeometryError: the model is not one link of unrotated boxes with a floor and four walls.
+        BoxGeometryError: the file cannot be read, or the model is not one link of unrotated boxes with a floor
+            and four walls.
     """
+    if isinstance(urdf, Path):
+        try:
+            urdf = UrdfDocument.read(urdf)
+        except UrdfError as e:
+            raise BoxGeometryError(box, str(e)) from None
     parts = _collision_boxes(box, urdf, scale)
     cx = (min(p[0] for p in parts) + max(p[3] for p in parts)) / 2
     cy = (min(p[1] for p in parts) + max(p[4] for p in parts)) / 2

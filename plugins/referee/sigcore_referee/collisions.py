@@ -30,13 +30,9 @@ class Episode:
 
 
 def default_floor_parts(sim: Simulation, robot: str) -> frozenset[str]:
-    """Parts of ``robot`` that stand on the floor: the drive's wheel links and links named ``*caster*``."""
-    urdf = sim.urdf(robot)
-    parts = {link for link in sim.backend.parts(robot) if "caster" in link}
-    drive = sim.robot_model(robot).drive
-    if drive is not None:
-        parts |= {urdf.joint(drive.left).child, urdf.joint(drive.right).child}
-    return frozenset(parts)
+    """Parts of ``robot`` that stand on the floor: its wheels and casters, as the core's contact events define
+    them (``Simulation.rolling_parts``; their floor contacts are no collision events)."""
+    return sim.rolling_parts(robot)
 
 
 class CollisionRule:

@@ -1,11 +1,12 @@
-"""The ``<plugin name="referee" .../>`` attributes, as a strict pydantic model."""
+"""The ``<plugin name="referee" .../>`` attributes, as a strict pydantic model (validated by the core)."""
 
 from __future__ import annotations
 
-import difflib
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
+from pydantic import BeforeValidator, Field, field_validator
+
+from sigcore.feature import FeatureConfig
 
 
 def _words(value: object) -> object:
@@ -29,25 +30,14 @@ def _corners(value: object) -> object:
 Words = Annotated[tuple[str, ...], BeforeValidator(_words)]
 Corners = Annotated[tuple[float, float, float, float, float, float] | None, BeforeValidator(_corners)]
 
-_VALID = {
-    "rules": "'cleanup' or 'none'",
-    "time_limit": "seconds >= 0 (0: no limit), e.g. 600",
-    "box_inner": "'x0 y0 z0 x1 y1 z1' [m] with x0 < x1, y0 < y1, z0 < z1",
-    "stop_on_finish": "'true' or 'false'",
-    "floor": "'true' or 'false'",
-    **{k: "an integer number of points, e.g. -100" for k in ("correct_box", "wrong_box", "grasp", "collision")},
-}
 
-
-class RefereeConfig(BaseModel):
+class RefereeConfig(FeatureConfig):
     """Attributes of ``<plugin name="referee">``; every one is optional. Points are integers."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, str_strip_whitespace=True, allow_inf_nan=False)
 
     rules: Literal["cleanup", "none"] = Field(
         default="none", description="built-in rules: 'cleanup' detects the clean-up task's events itself; "
                                     "'none' only scores the messages of the viewer service")
-    service: str = Field(default="referee", min_length=1, pattern=r"^\S+$",
+    service: str = Field(default="referee", min_length=1,
                          description="name of the viewer service (_connect_to_service, _send_msg_to_srv)")
     correct_box: int = Field(default=1000, description="trash item at rest in a box that accepts it [points]")
     wrong_box: int = Field(default=-600, description="trash item at rest in another trash box [points]")
@@ -78,24 +68,9 @@ class RefereeConfig(BaseModel):
                                                          "box's frame in [m]; default: read from its URDF")
     stop_on_finish: bool = Field(default=False, description="stop the run when the task ends")
 
+    @field_validator("service")
     @classmethod
-    def from_attributes(cls, config: dict[str, str]) -> RefereeConfig:
-        """Validate the plugin element's attributes.
-
-        Raises:
-            ValueError: naming the attribute, what was wrong and what is valid.
-        """
-        fields = list(cls.model_fields)
-        unknown = [k for k in config if k not in fields]
-        if unknown:
-            close = difflib.get_close_matches(unknown[0], fields, n=1)
-            hint = f" (did you mean '{close[0]}'?)" if close else ""
-            raise ValueError(f"unknown attribute '{unknown[0]}'{hint}; valid: {', '.join(fields)}")
-        try:
-            return cls.model_validate(config)
-        except ValidationError as e:
-            err = e.errors()[0]
-            where = str(err["loc"][0])
-            valid = _VALID.get(where, cls.model_fields[where].description or "")
-            message = str(err["msg"]).removeprefix("Value error, ")
-            raise ValueError(f"attribute '{where}'={config.get(where, '')!r}: {message}; valid: {valid}") from None
+    def _one_word(cls, value: str) -> str:
+        if any(c.isspace() for c in value):
+            raise ValueError(f"{value!r} has spaces; valid: one word, e.g. 'referee'")
+        return value

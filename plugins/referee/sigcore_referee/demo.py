@@ -90,7 +90,7 @@ class CleanupRobot(Controller):
         yield from self._approach(job.pick)
         yield from self._pick(job.side, hand, job.item)
         yield from self._until(lambda: self.follower.go_to(job.pick.stage_x, job.pick.stage_y, backwards=True))
-        if job.item not in self.robot.sim.held_by:
+        if not self.robot.sim.grasps.is_held(job.item):
             self._note(f"could not grasp {job.item}; skipping it")
             return
         self._note(f"carrying {job.item} to {job.box}")
@@ -117,7 +117,7 @@ class CleanupRobot(Controller):
             return False
 
         yield from self._arm(side, hand_down(side, x, y, z + GRASP_ABOVE), 1.0, stop_when=grasped)
-        if item not in self.robot.sim.held_by:
+        if not self.robot.sim.grasps.is_held(item):
             grasped()
         yield from self._arm(side, TUCK, 1.2)
 

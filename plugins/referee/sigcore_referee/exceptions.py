@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from sigcore.agent.exceptions import ApiError
+from sigcore.errors import SigcoreError
 
 MESSAGE_FORMAT = "Referee/<text>/<points>"
 """The sig_ros referee message format: ``points`` is an integer (negative for a penalty)."""
@@ -36,7 +37,7 @@ class TaskFinishedError(ApiError):
         super().__init__(f"the task ended at t = {time:.2f} s ({result}); the score is final")
 
 
-class BoxGeometryError(ValueError):
+class BoxGeometryError(SigcoreError, ValueError):
     """The inner volume of a trash box cannot be read from its model; set ``box_inner`` on the plugin.
 
     Attributes:

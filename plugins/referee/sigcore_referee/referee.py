@@ -7,8 +7,11 @@ import logging
 from collections.abc import Callable
 from typing import Literal
 
+from pydantic import BaseModel
+
 from sigcore.feature import Feature
 from sigcore.sim.simulation import Simulation
+from sigcore.world.exceptions import FieldError
 from sigcore.world.models import Object
 
 from .boxes import TrashBox, inner_volume
@@ -18,6 +21,7 @@ from .events import Kind, RefereeEvent, parse_message
 from .exceptions import BoxGeometryError, TaskFinishedError
 from .items import ItemRule
 from .report import report_lines
+from .topics import EventMsg, RefereeTopics, ResultMsg
 
 log = logging.getLogger("sigcore.referee")
 
@@ -34,15 +38,22 @@ class Referee(Feature):
     last one of a task is of kind ``end``).
 
     Raises:
-        ValueError: an attribute is invalid, or (``rules="cleanup"``) a trash item no box accepts, or a trash box
-            whose inner volume cannot be read.
+        FieldError: ``robots`` names no robot, or (``rules="cleanup"``) no entity has the ``trash_tag``.
+        ValueError: (``rules="cleanup"``) a trash item no box accepts, or a trash box whose inner volume cannot be
+            read.
     """
 
     name = "referee"
 
-    def __init__(self, sim: Simulation, config: dict[str, str]) -> None:
+    @classmethod
+    def message_types(cls) -> list[type[BaseModel]]:
+        """``RefereeEvent`` and ``RefereeResult`` (``/referee/events``, ``/referee/result``)."""
+        return [EventMsg, ResultMsg]
+    config_model = RefereeConfig
+
+    def __init__(self, sim: Simulation, config: RefereeConfig) -> None:
         self.sim = sim
-        self.config = cfg = RefereeConfig.from_attributes(config)
+        self.config = cfg = config
         self.score = 0
         self.events: list[RefereeEvent] = []
         self.observers: list[Callable[[RefereeEvent], None]] = []
@@ -58,6 +69,7 @@ class Referee(Feature):
         if cfg.rules == "cleanup" or cfg.time_limit > 0:
             self._every = max(1, round(1.0 / (cfg.rate * sim.dt)))
             sim.add_step_observer(self._on_step)
+        self.topics = RefereeTopics(self)
 
     def _cleanup_rules(self) -> None:
         cfg, sim = self.config, self.sim
@@ -65,7 +77,9 @@ class Referee(Feature):
             a.name for a in sim.world.entities if a.kind == "robot"]
         unknown = [r for r in robots if r not in sim.agents or sim.agents[r].kind != "robot"]
         if unknown:
-            raise ValueError(f"attribute 'robots': '{unknown[0]}' is not a robot of this world")
+            robots_here = [a.name for a in sim.world.entities if a.kind == "robot"]
+            raise FieldError("robots", f"'{unknown[0]}' is not a robot of this world; robots: "
+                                       f"{', '.join(robots_here) or 'none'}")
         boxes = []
         for entity in sim.world.entities:
             if cfg.box_tag not in entity.tags:
@@ -74,11 +88,11 @@ class Referee(Feature):
             if inner is None:
                 if not isinstance(entity, Object) or entity.urdf is None:
                     raise BoxGeometryError(entity.name, "it is not a URDF object")
-                inner = inner_volume(entity.name, sim.world.resolve(entity.urdf), entity.scale)
+                inner = inner_volume(entity.name, sim.world.urdf(entity.name), entity.scale)
             boxes.append(TrashBox(entity.name, frozenset(entity.tags) - {cfg.box_tag}, inner))
         items = {a.name: frozenset(a.tags) - {cfg.trash_tag} for a in sim.world.entities if cfg.trash_tag in a.tags}
         if not items:
-            raise ValueError(f"rules 'cleanup': no entity is tagged '{cfg.trash_tag}' (attribute 'trash_tag')")
+            raise FieldError("trash_tag", f"rules 'cleanup': no entity is tagged '{cfg.trash_tag}'")
         for item, kinds in items.items():
             if not any(kinds & b.accepts for b in boxes):
                 offered = "; ".join(f"{b.name}: {' '.join(sorted(b.accepts))}" for b in boxes) or "none"
@@ -135,6 +149,7 @@ class Referee(Feature):
         if self.items is not None and self.collisions is not None:
             self.items.reset()
             self.collisions.reset()
+        self.topics.publish_score()
 
     def _on_step(self, sim: Simulation) -> None:
         if self.finished or sim.step_count % self._every:

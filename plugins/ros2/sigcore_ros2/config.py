@@ -11,11 +11,12 @@ The ``ros2`` feature only stores this configuration; the transport reads it when
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator
 
-from sigcore.feature import Feature
+from sigcore.feature import Feature, FeatureConfig
+from sigcore.world.plugin_config import validate_plugin
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
@@ -51,7 +52,7 @@ def parse_qos(text: str) -> dict[str, QosOverride]:
         topic, sep, spec = item.partition(":")
         topic = topic.strip()
         if not sep or not re.fullmatch(r"/?[A-Za-z_][A-Za-z0-9_/]*", topic):
-            raise ValueError(f"qos: '{item}' is not 'TOPIC: WORDS' (e.g. '/clock: best_effort depth=1')")
+            raise ValueError(f"'{item}' is not 'TOPIC: WORDS'; valid: e.g. '/clock: best_effort depth=1'")
         fields: dict[str, object] = {}
         for word in spec.split():
             if word in ("reliable", "best_effort"):
@@ -63,13 +64,20 @@ def parse_qos(text: str) -> dict[str, QosOverride]:
             elif re.fullmatch(r"depth=\d+", word):
                 fields["depth"] = int(word.split("=")[1])
             else:
-                raise ValueError(f"qos: unknown word '{word}' for {topic}; valid: {', '.join(QOS_WORDS)}, depth=N")
-        out[topic if topic.startswith("/") else "/" + topic] = QosOverride(**fields)  # type: ignore[arg-type]
+                raise ValueError(f"unknown word '{word}' for {topic}; valid: {', '.join(QOS_WORDS)}, depth=N")
+        out[topic if topic.startswith("/") else "/" + topic] = QosOverride.model_validate(fields)
     return out
 
 
-class Ros2Config(BaseModel):
-    """Settings of the ROS 2 transport.
+def _qos(value: object) -> object:
+    return parse_qos(value) if isinstance(value, str) else value
+
+
+QosField = Annotated[dict[str, QosOverride], BeforeValidator(_qos)]
+
+
+class Ros2Config(FeatureConfig):
+    """Settings of the ROS 2 transport: the attributes of ``<plugin name="ros2">``, validated by the core.
 
     Attributes:
         clock_rate: /clock publication rate [Hz]; 0 publishes every step (the default).
@@ -80,53 +88,39 @@ class Ros2Config(BaseModel):
         qos: Per-topic QoS overrides, by absolute topic name.
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    clock_rate: float = Field(default=0.0, ge=0.0)
-    state_rate: float = Field(default=50.0, gt=0.0)
-    sim_prefix: str = ""
-    sigros: bool = True
-    standard: bool = True
-    qos: dict[str, QosOverride] = Field(default_factory=dict)
+    clock_rate: float = Field(default=0.0, ge=0.0, description="/clock publication rate in [Hz]; 0: every step")
+    state_rate: float = Field(default=50.0, gt=0.0, description="rate of /tf, odom and joint_states in [Hz]")
+    sim_prefix: str = Field(default="", description="namespace of the simulation_interfaces services, e.g. "
+                                                    "'/sim' (default: root)")
+    sigros: bool = Field(default=True, description="create the sig_ros-compatible <agent>_<suffix> endpoints")
+    standard: bool = Field(default=True, description="create the idiomatic topics (/clock, /tf, cmd_vel, ...)")
+    qos: QosField = Field(default_factory=dict, description="per-topic QoS overrides, 'TOPIC: WORDS; ...'")
 
     @field_validator("sim_prefix")
     @classmethod
     def _prefix(cls, value: str) -> str:
         value = value.rstrip("/")
         if value and not re.fullmatch(r"(/[A-Za-z_][A-Za-z0-9_]*)+", value):
-            raise ValueError(f"sim_prefix '{value}' is not a ROS namespace such as '/sim'")
+            raise ValueError(f"'{value}' is not a ROS namespace; valid: empty (root) or e.g. '/sim'")
         return value
-
-    @classmethod
-    def from_attributes(cls, attrs: dict[str, str]) -> Ros2Config:
-        """Build from the ``<plugin name="ros2">`` attributes (strings).
-
-        Raises:
-            ValueError: an unknown attribute or a bad value, naming it and what is valid.
-        """
-        data: dict[str, object] = dict(attrs)
-        unknown = sorted(set(data) - set(cls.model_fields))
-        if unknown:
-            raise ValueError(f"unknown attribute(s) {', '.join(unknown)}; valid: {', '.join(cls.model_fields)}")
-        if "qos" in data:
-            data["qos"] = parse_qos(str(data["qos"]))
-        try:
-            return cls.model_validate(data)
-        except ValidationError as e:
-            problems = "; ".join(f"{'.'.join(map(str, err['loc']))}: {err['msg']}" for err in e.errors())
-            raise ValueError(problems) from None
 
 
 class Ros2Feature(Feature):
     """``<plugin name="ros2" .../>``: holds the transport's settings for this world (does nothing per step)."""
 
     name = "ros2"
+    config_model = Ros2Config
 
-    def __init__(self, sim: Simulation, config: dict[str, str]) -> None:
-        self.config = Ros2Config.from_attributes(config)
+    def __init__(self, sim: Simulation, config: Ros2Config) -> None:
+        self.config = config
 
 
 def config_for(sim: Simulation) -> Ros2Config:
-    """The world's ROS 2 settings (defaults if it has no ``<plugin name="ros2">``)."""
-    feature = sim.features.get("ros2")
-    return feature.config if isinstance(feature, Ros2Feature) else Ros2Config()
+    """The world's ROS 2 settings: its ``<plugin name="ros2">`` element validated against :class:`Ros2Config`
+    (defaults if it has none).
+
+    Raises:
+        sigcore.world.WorldError: an attribute is invalid (located in the world file).
+    """
+    element = sim.world.plugin(Ros2Feature.name)
+    return Ros2Config() if element is None else validate_plugin(sim.world, element, Ros2Config)

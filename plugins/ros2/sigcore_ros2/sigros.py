@@ -6,11 +6,9 @@ import logging
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from sigcore.agent.events import CollisionEvent, Message
 from sigcore.api.call import call, finish
 from sigcore.api.deferred import Deferred
 from sigcore.api.table import ApiEntry
-from sigcore.sim.lidar import Scan
 
 from .convert import fill, ros_type, to_dict
 from .qos import Qos
@@ -37,59 +35,49 @@ class _Held:
 
 
 class SigRosEndpoints:
-    """Every ``<agent><suffix>`` topic and service of the world's agents.
+    """Every ``<agent><suffix>`` subscription and service of the world's agents (their published topics are
+    declared by the core: :class:`~sigcore_ros2.publications.PublicationEndpoints` creates them).
 
     Args:
         sim: The simulation.
         node: The node that owns the endpoints.
         receiver: Where subscriptions and services are registered.
         qos: QoS profiles.
-        scans: Publishes the ``<robot>_scan`` LaserScans (set by the standard endpoints, which build them).
     """
 
     def __init__(self, sim: Simulation, node: Node, receiver: Receiver, qos: Qos) -> None:
         self.sim = sim
         self.held: list[_Held] = []
-        self.collision: dict[str, Any] = {}
-        self.recv: dict[str, Any] = {}
-        self.scan: dict[str, Any] = {}
         self.names: dict[str, str] = {}  # endpoint name -> ROS type, for tests and docs
         self.missing: set[str] = set()  # API types with no built ROS 2 type (a feature newer than the build)
-        robots_with_lidar = {lidar.robot for lidar in sim.lidars}
-        entries = sim.api_entries()
-        for agent, handle in sim.agents.items():
-            for entry in entries:
-                if handle.kind not in entry.kinds:
-                    continue
-                name = entry.name_for(agent)
-                try:
-                    ros_type(entry, "srv" if entry.direction == "service" else "msg")
-                except (ImportError, AttributeError):
-                    if entry.ros_type not in self.missing:
-                        self.missing.add(entry.ros_type)
-                        log.warning("no ROS 2 type for %s (from %s): its endpoints are left out; rebuild the "
-                                    "interfaces: sigcore interfaces && python scripts/build_interfaces.py",
-                                    entry.ros_type, entry.origin)
-                    continue
-                if entry.direction == "publish":
-                    if entry.suffix == "_scan" and agent not in robots_with_lidar:
-                        continue
-                    msg_type = ros_type(entry, "msg")
-                    profile = qos.sensor(name) if entry.suffix == "_scan" else qos.events(name)
-                    pub = node.create_publisher(msg_type, name, profile)
-                    {"_onCollisionMsg": self.collision, "_onRecvMsg": self.recv, "_scan": self.scan}.get(
-                        entry.suffix, {})[agent] = pub
-                elif entry.direction == "subscribe":
-                    msg_type = ros_type(entry, "msg")
-                    sub = node.create_subscription(msg_type, name, _noop, qos.commands(name))
-                    receiver.add_subscription(sub, self._on_message(entry, agent))
-                else:
-                    srv_type = ros_type(entry, "srv")
-                    srv = node.create_service(srv_type, name, _noop)
-                    receiver.add_service(srv, self._on_request(entry, agent, srv))
-                self.names[name] = entry.ros_type
-        sim.collision_observers.append(self._collided)
-        sim.message_observers.append(self._received)
+        for entry, agent in self.plan(sim):
+            name = entry.name_for(agent)
+            try:
+                ros_type(entry, "srv" if entry.direction == "service" else "msg")
+            except (ImportError, AttributeError):
+                if entry.ros_type not in self.missing:
+                    self.missing.add(entry.ros_type)
+                    log.warning("no ROS 2 type for %s (from %s): its endpoints are left out; rebuild the "
+                                "interfaces: sigcore interfaces && python scripts/build_interfaces.py",
+                                entry.ros_type, entry.origin)
+                continue
+            if entry.direction == "subscribe":
+                msg_type = ros_type(entry, "msg")
+                sub = node.create_subscription(msg_type, name, _noop, qos.commands(name))
+                receiver.add_subscription(sub, self._on_message(entry, agent))
+            else:
+                srv_type = ros_type(entry, "srv")
+                srv = node.create_service(srv_type, name, _noop)
+                receiver.add_service(srv, self._on_request(entry, agent, srv))
+            self.names[name] = entry.ros_type
+
+    @staticmethod
+    def plan(sim: Simulation) -> list[tuple[ApiEntry, str]]:
+        """``(entry, agent)`` of every subscription and service (the published entries are the core's
+        publications)."""
+        entries = [e for e in sim.api_entries() if e.direction != "publish"]
+        return [(entry, agent) for agent, handle in sim.agents.items() for entry in entries
+                if handle.kind in entry.kinds]
 
     # ------------------------------------------------------------------ incoming
     def _on_message(self, entry: ApiEntry, agent: str) -> Any:
@@ -131,27 +119,6 @@ class SigRosEndpoints:
             held.srv.send_response(fill(held.srv.srv_type.Response(), {"success": False, "message": why}),
                                    held.header)
         self.held = []
-
-    # ------------------------------------------------------------------ outgoing
-    def _collided(self, event: CollisionEvent) -> None:
-        pub = self.collision.get(event.agent)
-        if pub is not None:
-            msg = pub.msg_type()
-            msg.name, msg.part = event.other, event.part
-            pub.publish(msg)
-
-    def _received(self, message: Message) -> None:
-        pub = self.recv.get(message.to)
-        if pub is not None:
-            msg = pub.msg_type()
-            msg.sender, msg.content = message.sender, message.content
-            pub.publish(msg)
-
-    def publish_scan(self, scan: Scan, msg: Any) -> None:
-        """Publish a built LaserScan on ``<robot>_scan``."""
-        pub = self.scan.get(scan.robot)
-        if pub is not None:
-            pub.publish(msg)
 
 
 def _noop(*_: Any) -> None:

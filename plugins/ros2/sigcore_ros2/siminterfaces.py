@@ -237,14 +237,14 @@ class SimInterfaces:
             return False
         handle = self.sim.agent(req.entity)
         moving = any(v != 0.0 for v in twist)
-        if moving and not self.sim.modes(req.entity)["dynamics"]:
+        if moving and not self.sim.mode(req.entity, "dynamics"):
             res.result = _result(Result.RESULT_OPERATION_FAILED,
                                  f"'{req.entity}' is static (dynamics off): it cannot be given a velocity")
             return False
         try:
             handle.set_position((p.x, p.y, p.z))
             handle.set_rotation(q)
-            if self.sim.modes(req.entity)["dynamics"]:
+            if self.sim.mode(req.entity, "dynamics"):
                 handle.set_velocity((lin.x, lin.y, lin.z))
                 handle.set_angular_velocity((ang.x, ang.y, ang.z))
         except ApiError as e:

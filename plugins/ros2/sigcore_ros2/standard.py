@@ -1,8 +1,9 @@
-"""Idiomatic ROS 2 topics: /clock, /tf, /tf_static, and per robot cmd_vel, odom, joint_states, LaserScans.
+"""Idiomatic ROS 2 topics: /clock, /tf, and per robot cmd_vel, odom, joint_states, LaserScans.
 
-Frames (REP-105): with one robot, ``odom`` and the URDF's root link (e.g. ``base_link``); with several, each
-robot's frames are prefixed with ``<robot>/``. ``world -> odom`` (the robot's start pose) and every fixed joint
-of the URDF are on /tf_static; ``odom -> base_link`` (wheel odometry) is on /tf.
+Frames (REP-105) are named by the core (:class:`sigcore.sim.frames.Frames`): with one robot, ``odom`` and the URDF's
+root link (e.g. ``base_link``); with several, each robot's frames are prefixed with ``<robot>/``. ``odom ->
+base_link`` (wheel odometry) is on /tf; the static part of the tree (``world -> odom``, fixed joints) is the core's
+``/tf_static`` publication.
 """
 
 from __future__ import annotations
@@ -11,7 +12,6 @@ import logging
 import math
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from geometry_msgs.msg import TransformStamped, Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
@@ -20,23 +20,19 @@ from tf2_msgs.msg import TFMessage
 
 from sigcore.agent.exceptions import ApiError
 from sigcore.agent.robot import RobotObj
-from sigcore.geometry import quat_conj, quat_mul, quat_rotate
 from sigcore.sim.lidar import Scan
 
 from .cdr import CdrTemplate
-from .convert import ranges_array, stamp, transform
+from .publications import fill_message
 from .qos import Qos
-from .slam_topics import SlamTopics
 
 if TYPE_CHECKING:
-    from builtin_interfaces.msg import Time
     from rclpy.node import Node
 
     from sigcore.sim.simulation import Simulation
 
     from .config import Ros2Config
     from .receiver import Receiver
-    from .sigros import SigRosEndpoints
 
 log = logging.getLogger("sigcore.ros2")
 
@@ -44,7 +40,7 @@ log = logging.getLogger("sigcore.ros2")
 
 
 class StandardEndpoints:
-    """/clock, /tf, /tf_static and the per-robot topics; published by a step observer.
+    """/clock, /tf and the per-robot topics; published by a step observer.
 
     Args:
         sim: The simulation.
@@ -52,24 +48,19 @@ class StandardEndpoints:
         receiver: Where the cmd_vel subscriptions are registered.
         qos: QoS profiles.
         config: Rates.
-        sigros: The sig_ros endpoints (``<robot>_scan`` gets the same LaserScans), or None.
     """
 
-    def __init__(self, sim: Simulation, node: Node, receiver: Receiver, qos: Qos, config: Ros2Config,
-                 sigros: SigRosEndpoints | None) -> None:
+    def __init__(self, sim: Simulation, node: Node, receiver: Receiver, qos: Qos, config: Ros2Config) -> None:
         self.sim = sim
-        self.sigros = sigros
         self.dt_ns = round(sim.dt * 1e9)
         self.clock_every = 1 if config.clock_rate <= 0 else max(1, round(1.0 / (config.clock_rate * sim.dt)))
         self.state_every = max(1, round(1.0 / (config.state_rate * sim.dt)))
         self.clock_pub = node.create_publisher(Clock, "/clock", qos.clock())
         self._clock = CdrTemplate(Clock(), ["clock.sec", "clock.nanosec"])
         self.tf_pub = node.create_publisher(TFMessage, "/tf", qos.tf())
-        self.tf_static_pub = node.create_publisher(TFMessage, "/tf_static", qos.latched("/tf_static"))
-        self.topics: dict[str, str] = {"/clock": "rosgraph_msgs/msg/Clock", "/tf": "tf2_msgs/msg/TFMessage",
-                                       "/tf_static": "tf2_msgs/msg/TFMessage"}
+        self.topics: dict[str, str] = {"/clock": "rosgraph_msgs/msg/Clock", "/tf": "tf2_msgs/msg/TFMessage"}
         robots = [h for h in sim.agents.values() if isinstance(h, RobotObj)]
-        self.prefix = {r.name: (f"{r.name}/" if len(robots) > 1 else "") for r in robots}
+        self.prefix = {r.name: sim.frames.prefix(r.name) for r in robots}
         self.base = {r.name: self.prefix[r.name] + sim.urdf(r.name).root for r in robots}
         self.odom_pub: dict[str, Any] = {}
         self.joint_pub: dict[str, Any] = {}
@@ -96,6 +87,7 @@ class StandardEndpoints:
                                                                                    qos.sensor(topic))
             self.topics[topic] = "sensor_msgs/msg/LaserScan"
         self._warned: set[str] = set()
+        self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
         # the state messages, serialized once: each publication only rewrites their numbers
         moving = [name for name in sim.odometry if name in self.odom_pub]
         self._odom = [(sim.odometry[name], self.odom_pub[name], _odometry(self.prefix[name] + "odom", self.base[name]))
@@ -104,43 +96,28 @@ class StandardEndpoints:
         self._joint_states = [(name, joints, self.joint_pub[name], _joint_state(joints))
                               for name, joints in self.joints.items()]
         sim.scan_observers.append(self._scan)
-        self.slam: SlamTopics | None = None
-        if "slam" in sim.features:
-            robot = sim.features["slam"].robot  # type: ignore[attr-defined]
-            self.slam = SlamTopics(sim, node, qos, self.tf_pub, self.prefix[robot])
-            self.topics.update(self.slam.topics)
 
-    # ------------------------------------------------------------------ frames
-    def static_transforms(self) -> TFMessage:
-        """world -> odom per robot with a drive (world -> map for the robot SLAM maps: map -> odom then comes from
-        SLAM on /tf), and every fixed joint of each robot's URDF."""
-        sim, t = self.sim, stamp(self.sim.step_count, self.dt_ns)
-        out = []
-        for name, odo in sim.odometry.items():
-            x, y, yaw = odo.origin
-            child = "map" if self.slam is not None and self.slam.robot == name else "odom"
-            out.append(transform("world", self.prefix[name] + child, t, (x, y, 0.0),
-                                  (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))))
-        for name, prefix in self.prefix.items():
-            for joint in sim.urdf(name).joints:
-                if joint.movable:
-                    continue
-                try:
-                    pp, pq = sim.backend.get_pose(name, self._part(name, joint.parent))
-                    cp, cq = sim.backend.get_pose(name, self._part(name, joint.child))
-                except Exception:  # a link the backend merged away
-                    continue
-                inv = quat_conj(pq)
-                out.append(transform(prefix + joint.parent, prefix + joint.child, t,
-                                      quat_rotate(inv, np.asarray(cp) - np.asarray(pp)), quat_mul(inv, cq)))
-        return TFMessage(transforms=out)
-
-    def _part(self, robot: str, link: str) -> str | None:
-        return None if link == self.sim.urdf(robot).root else link
+    @staticmethod
+    def plan(sim: Simulation) -> dict[str, str]:
+        """Every topic the constructor creates (name -> type), without creating any."""
+        out = {"/clock": "rosgraph_msgs/msg/Clock", "/tf": "tf2_msgs/msg/TFMessage"}
+        for name, handle in sim.agents.items():
+            if isinstance(handle, RobotObj):
+                out[f"/{name}/joint_states"] = "sensor_msgs/msg/JointState"
+                if sim.robot_model(name).drive is not None:
+                    out[f"/{name}/odom"] = "nav_msgs/msg/Odometry"
+                    out[f"/{name}/cmd_vel"] = "geometry_msgs/msg/Twist"
+        for lidar in sim.lidars:
+            out[f"/{lidar.robot}/{lidar.model.name}"] = "sensor_msgs/msg/LaserScan"
+        return out
 
     # ------------------------------------------------------------------ incoming
     def _cmd_vel(self, robot: RobotObj) -> Any:
+        """The handler of ``/<robot>/cmd_vel``: drive, and stop again after the drive's ``cmd_vel_timeout`` of
+        simulated time without a new accepted message (0: never), like ros2_control's diff_drive_controller."""
         topic = f"/{robot.name}/cmd_vel"
+        timeout = self.sim.drive(robot.name).cmd_vel_timeout
+        steps = max(1, round(timeout / self.sim.dt)) if timeout > 0 else 0
 
         def handle(msg: Twist) -> None:
             try:
@@ -150,8 +127,23 @@ class StandardEndpoints:
                 if key not in self._warned:
                     self._warned.add(key)
                     log.warning("%s refused (logged once): %s", topic, e)
+                return
+            if steps:
+                self._cmd_vel_deadline[robot.name] = self.sim.step_count + steps
 
         return handle
+
+    def _stop_stale_cmd_vel(self, step: int) -> None:
+        """Stop the wheels of each robot whose last cmd_vel is ``cmd_vel_timeout`` old (a crashed client must not
+        leave its robot driving)."""
+        for name, deadline in list(self._cmd_vel_deadline.items()):
+            if step >= deadline:
+                del self._cmd_vel_deadline[name]
+                self.sim.robot(name).set_wheel_velocity(0.0, 0.0)
+                if f"timeout:{name}" not in self._warned:
+                    self._warned.add(f"timeout:{name}")
+                    log.info("/%s/cmd_vel: no message for %g s: wheels stopped (cmd_vel_timeout of its <drive>; "
+                             "logged once)", name, self.sim.drive(name).cmd_vel_timeout)
 
     # ------------------------------------------------------------------ outgoing
     def on_step(self, sim: Simulation) -> None:
@@ -161,8 +153,8 @@ class StandardEndpoints:
             self.clock_pub.publish(self._clock.pack(*divmod(n * self.dt_ns, 1_000_000_000)))
         if n % self.state_every == 0:
             self.publish_state()
-        if self.slam is not None:
-            self.slam.on_step(sim)
+        if self._cmd_vel_deadline:
+            self._stop_stale_cmd_vel(n)
 
     def publish_clock(self) -> None:
         """Publish the current time now (e.g. at start and after a reset)."""
@@ -189,25 +181,11 @@ class StandardEndpoints:
             pub.publish(template.pack(sec, nanosec, *[backend.get_joint_angle(name, j) for j in joints],
                                       *[backend.get_joint_velocity(name, j) for j in joints]))
 
-    @staticmethod
-    def scan_publisher(sim: Simulation, sigros: SigRosEndpoints) -> Any:
-        """A scan observer feeding only ``<robot>_scan`` (when the standard topics are switched off)."""
-        dt_ns = round(sim.dt * 1e9)
-
-        def observe(scan: Scan) -> None:
-            sigros.publish_scan(scan, laser_scan(scan, stamp(round(scan.stamp / sim.dt), dt_ns), scan.frame))
-
-        sim.scan_observers.append(observe)
-        return observe
-
     def _scan(self, scan: Scan) -> None:
-        msg = laser_scan(scan, stamp(round(scan.stamp / self.sim.dt), self.dt_ns),
-                         self.prefix.get(scan.robot, "") + scan.frame)
         pub = self.scan_pub.get((scan.robot, scan.lidar))
         if pub is not None:
-            pub.publish(msg)
-        if self.sigros is not None:
-            self.sigros.publish_scan(scan, msg)
+            stamp = round(scan.stamp / self.sim.dt) * self.dt_ns
+            pub.publish(fill_message(LaserScan(), scan.fields(self.sim.frames.name(scan.robot, scan.frame), stamp)))
 
 
 def _odometry(frame: str, child: str) -> CdrTemplate:
@@ -239,14 +217,3 @@ def _joint_state(joints: list[str]) -> CdrTemplate:
     msg.name = list(joints)
     msg.position, msg.velocity = [0.0] * len(joints), [0.0] * len(joints)
     return CdrTemplate(msg, ["header.stamp.sec", "header.stamp.nanosec", "position", "velocity"])
-
-
-def laser_scan(scan: Scan, t: Time, frame: str) -> LaserScan:
-    """A LaserScan of ``scan`` stamped ``t`` in ``frame``."""
-    msg = LaserScan()
-    msg.header.stamp, msg.header.frame_id = t, frame
-    msg.angle_min, msg.angle_max, msg.angle_increment = scan.angle_min, scan.angle_max, scan.angle_increment
-    msg.time_increment = 0.0
-    msg.scan_time, msg.range_min, msg.range_max = scan.scan_time, scan.range_min, scan.range_max
-    msg.ranges = ranges_array(scan.ranges)
-    return msg

@@ -30,6 +30,9 @@ SWITCH_INTERVAL = 0.0001
 PAUSED_CLOCK_PERIOD = 0.1
 """While paused, /clock repeats the current time this often [s of wall time], like other simulators do."""
 
+FLUSH_TIMEOUT = 2.0
+"""At the end, wait at most this long [s] for subscribers to acknowledge the last messages (e.g. a result)."""
+
 READY_TOPIC = "/sigcore/ready"
 """Latched std_msgs/Bool, true once every endpoint exists (and false when the simulation stops)."""
 
@@ -62,6 +65,15 @@ class Ros2Transport(Transport):
 
     name = "ros2"
 
+    @classmethod
+    def unavailable(cls) -> str | None:
+        """Why rclpy cannot be imported (ROS 2 missing), or None."""
+        try:
+            import rclpy  # noqa: F401 - only whether it imports
+        except Exception as e:  # ImportError, or a broken ROS 2 install raising while loading its libraries
+            return f"rclpy cannot be imported ({type(e).__name__}: {e}); run scripts/setup.sh or source ROS 2 Jazzy"
+        return None
+
     def __init__(self, config: Ros2Config | None = None, node_name: str = "sigcore") -> None:
         self._config = config
         self._node_name = node_name
@@ -73,13 +85,36 @@ class Ros2Transport(Transport):
         """Every endpoint created, name -> ROS type (after :meth:`start`)."""
 
     # ------------------------------------------------------------------ Transport
+    def describe(self, sim: Simulation) -> dict[str, str]:
+        """Every endpoint :meth:`start` creates for ``sim`` (name -> type), without ROS: the agents' subscriptions
+        and services, the declared publications, the idiomatic topics, simulation_interfaces, readiness."""
+        from .sigros import SigRosEndpoints
+        from .siminterfaces import SERVICES
+        from .standard import StandardEndpoints
+
+        config = self._config or config_for(sim)
+        out: dict[str, str] = {}
+        if config.sigros:
+            out.update({entry.name_for(agent): entry.ros_type for entry, agent in SigRosEndpoints.plan(sim)})
+        out.update({p.topic: p.full_type for p in sim.publications.declared if config.sigros or not p.agent})
+        if config.standard:
+            out.update(StandardEndpoints.plan(sim))
+        prefix = config.sim_prefix
+        out.update({f"{prefix}/{name}": f"simulation_interfaces/srv/{srv.__name__}" for name, srv in SERVICES.items()})
+        out[f"{prefix}/simulate_steps"] = "simulation_interfaces/action/SimulateSteps"
+        out[READY_TOPIC] = "std_msgs/msg/Bool"
+        return out
+
+    # ------------------------------------------------------------------ Transport
     def start(self, sim: Simulation) -> None:
-        """Create the node and every endpoint, publish /tf_static and /clock, then announce readiness."""
+        """Create the node and every endpoint, publish /clock and the latched publications, then announce
+        readiness."""
         import rclpy
         from rclpy.context import Context
         from rclpy.executors import MultiThreadedExecutor
         from std_msgs.msg import Bool
 
+        from .publications import PublicationEndpoints
         from .qos import Qos
         from .receiver import Receiver
         from .sigros import SigRosEndpoints
@@ -102,11 +137,12 @@ class Ros2Transport(Transport):
         receiver = Receiver(self._context)
         self._receiver = receiver
         self.sigros = SigRosEndpoints(sim, node, receiver, qos) if config.sigros else None
-        self.standard = StandardEndpoints(sim, node, receiver, qos, config, self.sigros) if config.standard else None
-        if self.standard is None and self.sigros is not None:
-            self._scan_only = StandardEndpoints.scan_publisher(sim, self.sigros)
+        self.standard = StandardEndpoints(sim, node, receiver, qos, config) if config.standard else None
         self.interfaces = SimInterfaces(sim, node, receiver, config.sim_prefix, self._after_reset)
-        self.endpoints = {**(self.sigros.names if self.sigros else {}),
+        # everything the core and the features declare (the agents' published topics, /tf_static, /map, ...)
+        self.publications = PublicationEndpoints(node, qos, agent_topics=config.sigros)
+        sim.publications.connect(self.publications)
+        self.endpoints = {**(self.sigros.names if self.sigros else {}), **self.publications.names,
                           **(self.standard.topics if self.standard else {}), **self.interfaces.names}
         # the action server on its own node and executor (it needs rclpy's waitable machinery)
         self._action_node = rclpy.create_node(f"{self._node_name}_actions", context=self._context)
@@ -124,7 +160,6 @@ class Ros2Transport(Transport):
         receiver.start()
         self._executor_thread.start()
         if self.standard is not None:
-            self.standard.tf_static_pub.publish(self.standard.static_transforms())
             self.standard.publish_clock()
             self.standard.publish_state()
         self._ready = node.create_publisher(Bool, READY_TOPIC, qos.latched(READY_TOPIC))
@@ -151,6 +186,10 @@ class Ros2Transport(Transport):
         from std_msgs.msg import Bool
 
         try:
+            if self._sim is not None:
+                self._sim.publications.disconnect(self.publications)
+            if not self.publications.flush(FLUSH_TIMEOUT):
+                log.warning("some subscribers did not acknowledge the last messages within %g s", FLUSH_TIMEOUT)
             self._receiver.drain()
             self.interfaces.fail_waiters("the simulation stopped")
             if self.sigros is not None:

@@ -1,10 +1,13 @@
-"""Configuration of the ``slam`` feature: the attributes of ``<plugin name="slam" .../>``, validated."""
+"""Configuration of the ``slam`` feature: the attributes of ``<plugin name="slam" .../>``, validated by the core."""
 
 from __future__ import annotations
 
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BeforeValidator, Field, model_validator
+
+from sigcore.feature import FeatureConfig
+from sigcore.world.exceptions import FieldError
 
 
 def _pair(value: Any) -> Any:
@@ -19,15 +22,14 @@ def _pair(value: Any) -> Any:
 Pair = Annotated[tuple[float, float], BeforeValidator(_pair)]
 
 
-class SlamConfig(BaseModel):
+class SlamConfig(FeatureConfig):
     """``<plugin name="slam" agent="robot_000" voxel_size="0.2" resolution="0.05" .../>``.
 
-    Every attribute is a string in the world file; numbers and booleans are parsed, unknown attributes are errors.
+    Every attribute is a string in the world file; numbers and booleans are parsed, unknown attributes are errors
+    (the core reports each at its ``file:line:column``).
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    agent: str = Field(min_length=1, description="robot whose lidar is mapped (it needs a <drive> and a <lidar>)")
+    agent: str = Field(min_length=1, description="robot whose lidar is mapped; it needs a <drive> and a <lidar>")
     lidar: str = Field(default="", description="name of the robot's <lidar> to use (empty: its first lidar)")
     voxel_size: float = Field(default=0.2, gt=0.0, le=5.0,
                               description="kiss-icp voxel size in [m]; at least twice the point spacing "
@@ -46,45 +48,16 @@ class SlamConfig(BaseModel):
                                               "odometry first")
     hit: float = Field(default=0.85, gt=0.0, le=10.0, description="log-odds added to a cell a beam ends in")
     miss: float = Field(default=0.4, gt=0.0, le=10.0, description="log-odds removed from a cell a beam crosses")
-    clamp: float = Field(default=5.0, gt=0.0, le=50.0, description="log-odds are kept in [-clamp, clamp]")
+    clamp: float = Field(default=5.0, gt=0.0, le=50.0, description="log-odds are kept between -clamp and clamp")
 
     @model_validator(mode="after")
     def _check(self) -> SlamConfig:
         width, height = self.size
         if width <= 0 or height <= 0:
-            raise ValueError(f"size '{width:g} {height:g}' must be two positive lengths [m], e.g. '30 30'")
+            raise FieldError("size", f"size '{width:g} {height:g}' must be two positive lengths [m], e.g. '30 30'")
         cells = (width / self.resolution) * (height / self.resolution)
         if cells > 25_000_000:
-            raise ValueError(f"size '{width:g} {height:g}' at resolution {self.resolution:g} is {cells:.0f} "
-                             "cells; at most 25000000: use a coarser resolution or a smaller size")
+            raise FieldError("size", f"size '{width:g} {height:g}' at resolution {self.resolution:g} is "
+                                     f"{cells:.0f} cells; at most 25000000: use a coarser resolution or a smaller "
+                                     "size")
         return self
-
-    @classmethod
-    def from_attributes(cls, attributes: dict[str, str]) -> SlamConfig:
-        """Validate the ``<plugin>`` attributes.
-
-        Raises:
-            ValueError: naming the attribute, what was wrong, and what is valid.
-        """
-        unknown = sorted(set(attributes) - set(cls.model_fields))
-        if unknown:
-            raise ValueError(f"unknown attribute(s) {', '.join(repr(u) for u in unknown)}; valid: "
-                             f"{', '.join(cls.model_fields)}")
-        try:
-            return cls.model_validate(attributes)
-        except ValidationError as e:
-            raise ValueError(_describe(e, attributes)) from None
-
-
-def _describe(e: ValidationError, attributes: dict[str, str]) -> str:
-    parts = []
-    for err in e.errors():
-        name = str(err["loc"][0]) if err["loc"] else ""
-        if not name:
-            parts.append(err["msg"].removeprefix("Value error, "))
-            continue
-        field = SlamConfig.model_fields[name]
-        got = f" (got '{attributes[name]}')" if name in attributes else ""
-        parts.append(f"attribute '{name}': {err['msg'].removeprefix('Value error, ')}{got}; valid: "
-                     f"{field.description}")
-    return "; ".join(parts)

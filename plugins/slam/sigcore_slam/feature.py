@@ -12,8 +12,11 @@ import numpy as np
 
 from sigcore.feature import Feature
 from sigcore.geometry import quat_to_matrix, quat_yaw
+from sigcore.publish import Publication, planar_quaternion, transform_fields
+from sigcore.sim.frames import WORLD
 from sigcore.sim.lidar import LidarSensor, Scan
 from sigcore.sim.odometry import OdometryState
+from sigcore.world.exceptions import FieldError
 from sigcore.world.models import Robot
 
 from . import api
@@ -33,6 +36,9 @@ MIN_POINTS = 20
 
 REFINE_POINTS = 200
 """The refinement uses at most about this many of a scan's points (every k-th): more add time, not accuracy."""
+
+MAP_RATE = 1.0
+"""``/map`` is published at most this often [Hz of simulated time], when the grid changed."""
 
 MAX_CORRECTION = (0.2, 0.1)
 """A refinement that moves kiss-icp's pose farther than this ([m], [rad]) is rejected (kiss-icp's pose is kept)."""
@@ -84,26 +90,27 @@ class SlamFeature(Feature):
     """
 
     name: ClassVar[str] = "slam"
+    config_model: ClassVar[type[SlamConfig]] = SlamConfig
 
     @classmethod
     def api_entries(cls) -> list[ApiEntry]:
         """``<robot>_save_map`` (sigcore_msgs/srv/SaveMap)."""
         return api.entries()
 
-    def __init__(self, sim: Simulation, config: dict[str, str]) -> None:
-        cfg = SlamConfig.from_attributes(config)
+    def __init__(self, sim: Simulation, config: SlamConfig) -> None:
+        cfg = config
         robots = [a.name for a in sim.world.agents if isinstance(a, Robot)]
         if cfg.agent not in robots:
-            raise ValueError(f"attribute 'agent': '{cfg.agent}' is not a robot of this world; robots: "
-                             f"{', '.join(robots) or 'none'}")
+            raise FieldError("agent", f"'{cfg.agent}' is not a robot of this world; robots: "
+                                      f"{', '.join(robots) or 'none'}")
         model = sim.robot_model(cfg.agent)
         if model.drive is None:
-            raise ValueError(f"attribute 'agent': robot '{cfg.agent}' has no <drive>; SLAM needs its wheel "
-                             "odometry")
+            raise FieldError("agent", f"robot '{cfg.agent}' has no <drive>; SLAM needs its wheel odometry")
         lidars = [lidar.name for lidar in model.lidars]
         name = cfg.lidar or (lidars[0] if lidars else "")
         if name not in lidars:
-            raise ValueError(f"attribute 'lidar': robot '{cfg.agent}' has no lidar '{name}'; lidars: "
+            raise FieldError("lidar" if cfg.lidar else "agent",
+                             f"robot '{cfg.agent}' has no lidar '{name}'; lidars: "
                              f"{', '.join(lidars) or 'none (add a <lidar> to the robot)'}")
         self.config = cfg
         self.robot = cfg.agent
@@ -131,8 +138,28 @@ class SlamFeature(Feature):
         self._start: Pose2 | None = None
         self._last_odom: Pose2 | None = None
         self._pending: Scan | None = None
+        self._declare(sim)
         sim.scan_observers.append(self._on_scan)
         sim.add_step_observer(self._on_step)
+
+    def _declare(self, sim: Simulation) -> None:
+        """The publications (``/map``, ``/<robot>/slam_pose``, ``map -> odom`` on ``/tf``) and the static
+        ``world -> map`` (the robot's start pose), which replaces ``world -> odom`` in the core's tree."""
+        self.map_frame = sim.frames.name(self.robot, "map")
+        self.odom_frame = sim.frames.name(self.robot, "odom")
+        x, y, yaw = self._odometry.origin
+        sim.frames.remove_static(self.odom_frame)
+        sim.frames.set_static(WORLD, self.map_frame, (x, y, 0.0), planar_quaternion(yaw))
+        declare = sim.publications.declare
+        self._map_pub = declare(Publication("/map", "nav_msgs/msg/OccupancyGrid", "latched",
+                                            f"the occupancy grid, when it changed, at most {MAP_RATE:g} Hz", "slam"))
+        self._pose_pub = declare(Publication(f"/{self.robot}/slam_pose", "geometry_msgs/msg/PoseStamped", "state",
+                                             "the SLAM pose in the map frame, after each scan", "slam"))
+        self._tf_pub = declare(Publication("/tf", "tf2_msgs/msg/TFMessage", "tf", "map -> odom after each scan",
+                                           "slam"))
+        self._dt, self._dt_ns = sim.dt, round(sim.dt * 1e9)
+        self._last_map_time = -math.inf
+        self._last_updates = -1
 
     # ------------------------------------------------------------------ per scan
     def _on_scan(self, scan: Scan) -> None:
@@ -142,11 +169,41 @@ class SlamFeature(Feature):
     def _on_step(self, sim: Simulation) -> None:
         if self._pending is not None:
             scan, self._pending = self._pending, None
-            self.process(scan, self._odometry.state)
+            self._publish(self.process(scan, self._odometry.state))
         elif self._start is None:
             # anchor the map with a scan at the first step, before the robot has moved (the wheel odometry, which
             # defines the map frame at the first processed scan, may already have slipped by the first regular scan)
-            self.process(self._anchor.scan(sim.backend, sim.time), self._odometry.state)
+            self._publish(self.process(self._anchor.scan(sim.backend, sim.time), self._odometry.state))
+
+    def _publish(self, state: SlamState) -> None:
+        """``map -> odom`` and the pose stamped with the scan's step; the map when it changed, at most
+        :data:`MAP_RATE` times per simulated second (latched, so it is kept for sinks that connect later)."""
+        if not self._tf_pub.active:
+            return
+        stamp = round(state.stamp / self._dt) * self._dt_ns
+        m2o, pose = state.map_to_odom, state.map_to_base
+        self._tf_pub.publish({"transforms": [transform_fields(self.map_frame, self.odom_frame, stamp,
+                                                              (m2o.x, m2o.y, 0.0), planar_quaternion(m2o.yaw))]},
+                             stamp)
+        w, _, _, z = planar_quaternion(pose.yaw)
+        self._pose_pub.publish({"header": {"stamp": stamp, "frame_id": self.map_frame},
+                                "pose": {"position": {"x": pose.x, "y": pose.y, "z": 0.0},
+                                         "orientation": {"x": 0.0, "y": 0.0, "z": z, "w": w}}}, stamp)
+        grid = state.grid
+        if grid.updates != self._last_updates and state.stamp - self._last_map_time >= 1.0 / MAP_RATE - 1e-9:
+            self._last_updates, self._last_map_time = grid.updates, state.stamp
+            self._map_pub.publish(self.occupancy_grid_fields(stamp), stamp)
+
+    def occupancy_grid_fields(self, stamp_ns: int) -> dict[str, Any]:
+        """The ``nav_msgs/OccupancyGrid`` fields of the grid (row-major from the origin cell, -1 unknown)."""
+        grid = self.grid
+        ox, oy = grid.origin
+        return {"header": {"stamp": stamp_ns, "frame_id": self.map_frame},
+                "info": {"map_load_time": stamp_ns, "resolution": float(grid.resolution), "width": int(grid.width),
+                         "height": int(grid.height),
+                         "origin": {"position": {"x": float(ox), "y": float(oy), "z": 0.0},
+                                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}},
+                "data": grid.data().ravel()}
 
     def process(self, scan: Scan, odometry: OdometryState) -> SlamState:
         """Register one scan and update the grid (called by the simulation; public for replaying logs).
