@@ -159,13 +159,17 @@ def test_signal_ends_a_ros2_run_with_summary_and_score_table(sig: signal.Signals
 
 @needs_ros
 def test_second_signal_while_stopping_aborts() -> None:
-    """SIGINT then SIGTERM at once: the second arrives while the run stops (its transport takes milliseconds to
-    close) and aborts it: exit 130, "interrupted", no results."""
+    """SIGINT then SIGTERM at once: the second is handled while the run stops and aborts it: exit 130,
+    "interrupted", no results."""
     sim = sigcore_run(str(CLEANUP))
     try:
         assert sim.wait_line("ready: transport 'ros2' is up", STARTUP), sim.output
+        # both signals pending at once, whatever the scheduler does between two kill() calls: stopped while they
+        # are sent, the process receives them together when continued (SIGINT first: they go in number order)
+        os.kill(sim.proc.pid, signal.SIGSTOP)
         os.kill(sim.proc.pid, signal.SIGINT)
-        os.kill(sim.proc.pid, signal.SIGTERM)  # signals of different numbers are both delivered, in number order
+        os.kill(sim.proc.pid, signal.SIGTERM)
+        os.kill(sim.proc.pid, signal.SIGCONT)
         assert sim.finish(30.0) == 130, sim.output
         assert "interrupted (SIGTERM while stopping after SIGINT): no results" in sim.output
         assert "referee (cleanup rules)" not in sim.output
