@@ -68,20 +68,29 @@ class Moderator(Node):
 
     def on_score(self, msg: Int32) -> None:
         self.received["scores"].append(msg.data)
+        self._update()
 
     def on_event(self, msg: RefereeEvent) -> None:
         self.received["events"].append({"time": msg.time, "kind": msg.kind, "text": msg.text,
                                         "points": msg.points, "score": msg.score})
         self.get_logger().info(f"referee: {msg.kind} {msg.points:+d} ({msg.text}), score {msg.score}")
+        self._update()
 
     def on_result(self, msg: RefereeResult) -> None:
         self.received["result"] = {"result": msg.result, "score": msg.score, "time": msg.time,
                                    "report": list(msg.report)}
         self.get_logger().info(f"referee result: {msg.result}, score {msg.score} after {msg.time:.1f} s")
+        self._update()
+
+    def _update(self) -> None:
+        """Write what was received (if asked); done once the result and the final `end` event are both in (they come
+        on different topics, in either order)."""
         if self.log:
             with open(self.log, "w") as f:
                 json.dump(self.received, f, indent=1)
-        self.done = True  # the task has ended: nothing left to moderate
+        events = self.received["events"]
+        if self.received["result"] is not None and events and events[-1]["kind"] == "end":
+            self.done = True  # the task has ended: nothing left to moderate
 
     def on_collision(self, msg: OnCollisionMsg) -> None:
         if msg.name.startswith(OBSTACLES):
