@@ -38,13 +38,14 @@ class Frames:
         robots = [a.name for a in sim.world.agents if a.kind == "robot"]
         self._prefix = {r: (f"{r}/" if len(robots) > 1 else "") for r in robots}
         self._static: dict[str, tuple[str, tuple[float, ...], tuple[float, ...]]] = {}
+        self._publisher: Publisher | None = None  # declared once the constructor has filled the tree
         for robot in robots:
             if sim.robot_model(robot).drive is not None:
                 pos, quat = sim.backend.get_pose(robot)
                 self.set_static(WORLD, self.name(robot, "odom"), (pos[0], pos[1], 0.0),
                                 planar_quaternion(quat_yaw(quat)))
             self._fixed_joints(robot)
-        self._publisher: Publisher = sim.publications.declare(TF_STATIC)
+        self._publisher = sim.publications.declare(TF_STATIC)
         self.publish()
 
     def _fixed_joints(self, robot: str) -> None:
@@ -92,8 +93,9 @@ class Frames:
 
     def publish(self) -> None:
         """Push the static tree on ``/tf_static`` (latched: done at construction and whenever it changes)."""
+        assert self._publisher is not None
         self._publisher.publish(self.static_fields(self._sim.stamp_ns))
 
     def _republish(self) -> None:
-        if hasattr(self, "_publisher"):  # not while the constructor fills the tree
+        if self._publisher is not None:
             self.publish()

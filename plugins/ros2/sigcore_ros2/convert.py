@@ -9,10 +9,11 @@ from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import TransformStamped
 from pydantic import BaseModel
 
 from sigcore.api.table import ApiEntry
+
+from .publications import fill_message
 
 
 def stamp(step_count: int, dt_ns: int) -> Time:
@@ -45,41 +46,12 @@ def to_dict(msg: Any, model: type[BaseModel]) -> dict[str, Any]:
 
 
 def fill(msg: Any, fields: dict[str, Any]) -> Any:
-    """Set ``msg``'s fields from ``fields`` (only those the message has); returns ``msg``."""
+    """Set ``msg``'s fields from ``fields`` (only those the message has; see :func:`fill_message`); returns
+    ``msg``."""
     slots = msg.get_fields_and_field_types()
-    for name, value in fields.items():
-        if name not in slots:
-            continue
-        kind = slots[name]
-        if kind == "double":
-            value = float(value)
-        elif kind.startswith("sequence<double"):
-            value = [float(v) for v in value]
-        elif kind.startswith("sequence<string"):
-            value = [str(v) for v in value]
-        elif kind.startswith("int"):
-            value = int(value)
-        setattr(msg, name, value)
-    return msg
+    return fill_message(msg, {name: value for name, value in fields.items() if name in slots})
 
 
 def finite(*values: float) -> bool:
     """Whether every value is a finite number."""
     return all(math.isfinite(v) for v in values)
-
-
-def ranges_array(ranges: np.ndarray) -> array.array:
-    """A float32 ``array('f')`` of scan ranges (what LaserScan accepts without a per-element check)."""
-    out = array.array("f")
-    out.frombytes(np.ascontiguousarray(ranges, dtype=np.float32).tobytes())
-    return out
-
-
-def transform(parent: str, child: str, t: Time, xyz: Any, wxyz: Any) -> TransformStamped:
-    """A ``TransformStamped`` ``parent -> child`` at time ``t``: translation [m], rotation (w, x, y, z)."""
-    tf = TransformStamped()
-    tf.header.stamp, tf.header.frame_id, tf.child_frame_id = t, parent, child
-    tr, rot = tf.transform.translation, tf.transform.rotation
-    tr.x, tr.y, tr.z = float(xyz[0]), float(xyz[1]), float(xyz[2])
-    rot.w, rot.x, rot.y, rot.z = float(wxyz[0]), float(wxyz[1]), float(wxyz[2]), float(wxyz[3])
-    return tf
