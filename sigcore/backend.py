@@ -19,7 +19,7 @@ from typing import ClassVar
 import numpy as np
 import numpy.typing as npt
 
-from .errors import SigcoreError
+from .errors import ApiError, SigcoreError
 from .world.models import World
 
 Array = npt.NDArray[np.float64]
@@ -178,3 +178,10 @@ class Backend(ABC):
 
 class BackendError(SigcoreError, RuntimeError):
     """The backend could not do what was asked; the message says why and what would be valid."""
+
+
+class BackendRefusal(BackendError, ApiError):
+    """A request on the running world that the backend refuses because of what was asked, not because the backend
+    failed: an unknown entity, part or joint, dynamics for a static object, a position target for a drive wheel,
+    a mass for a body without one. The API answers it like any refusal: one line, no traceback (an
+    :class:`~sigcore.agent.exceptions.ApiError`); it is still a :class:`BackendError` for callers of the backend."""

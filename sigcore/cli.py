@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import re
 import sys
 import time
 from pathlib import Path
@@ -11,19 +12,23 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 from . import __version__, plugins
 from .errors import SigcoreError
+from .isolation import CALLBACK_BUDGET, BudgetError, CallbackBudget
 from .world import WorldError, parse_world
 
 if TYPE_CHECKING:
     from .sim import Simulation
     from .transport import Transport
+    from .world import World
 
 app = typer.Typer(help="sigcore: drive a physics simulation through ROS 2 topics and services.",
                   no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False)
-out = Console(highlight=False, soft_wrap=True)
-err = Console(stderr=True, highlight=False)
+# Markup off: what is printed comes from users (names, errors, features' lines) and is never interpreted.
+out = Console(highlight=False, soft_wrap=True, markup=False)
+err = Console(stderr=True, highlight=False, markup=False)
 
 WorldPath = Annotated[Path, typer.Argument(exists=True, dir_okay=False, readable=True, help="world XML file")]
 
@@ -59,7 +64,13 @@ def _load(world_file: Path, backend: str, controllers: list[str] | None = None) 
         overrides[agent] = spec
     try:
         world = parse_world(world_file)
+    except WorldError as e:
+        raise _fail([str(i) for i in e.issues]) from None
+    try:
         return Simulation(world, backend, overrides)  # fires sigcore_world_loaded
+    except BackendError as e:  # first (a BackendRefusal is an ApiError too); located at the entity it names
+        raise _fail([f"{_entity_location(world, str(e))}: cannot build the world with backend '{backend}': {e}"]) \
+            from None
     except ApiError as e:
         raise _fail([f"{world_file}: --controller: {e}"]) from None
     except WorldError as e:  # the world file, a controller that cannot be created, a feature's attributes
@@ -68,15 +79,35 @@ def _load(world_file: Path, backend: str, controllers: list[str] | None = None) 
         raise _fail([str(e)]) from None
     except plugins.PluginError as e:
         raise _fail([f"{world_file}: {e}"]) from None
-    except BackendError as e:
-        raise _fail([f"{world_file}: cannot build the world with backend '{backend}': {e}"]) from None
     except SigcoreError as e:
         raise _fail([f"{world_file}: {e}"]) from None
     except KeyboardInterrupt:
         raise _fail(["interrupted while building the world"], 130) from None
-    except Exception as e:  # not one of ours: the backend's engine (or a bug) failed
-        raise _fail([f"{world_file}: cannot build the world with backend '{backend}': {type(e).__name__}: {e}"]) \
-            from None
+    except (Exception, SystemExit) as e:  # not one of ours: the backend's engine (or a bug) failed
+        raise _fail([f"{_entity_location(world, str(e))}: cannot build the world with backend '{backend}': "
+                     f"{type(e).__name__}: {e}"]) from None
+
+
+def _entity_location(world: World, text: str) -> str:
+    """``file:line:column`` of the first agent that ``text`` names as ``kind 'name'`` (else of ``<world>``)."""
+    for match in re.finditer(r"\b(?:robot|object|human|agent|entity) '([A-Za-z][A-Za-z0-9_]*)'", text):
+        line, column = world.location(match.group(1))
+        if line:
+            return f"{world.source}:{line}:{column}"
+    line, column = world.location("")
+    return f"{world.source}:{line or 1}:{column or 1}"
+
+
+def _check_endpoints(transport: Transport | None, sim: Simulation) -> None:
+    """Refuse (exit 2) a world whose endpoints ``transport`` cannot create: invalid or twice-used names."""
+    if transport is None:
+        return
+    try:
+        issues = transport.check(sim)
+    except ImportError as e:  # the transport's libraries are missing: it cannot start anyway
+        raise _fail([f"--transport {transport.name}: cannot plan its endpoints here ({e})"]) from None
+    if issues:
+        raise _fail([str(i) for i in issues])
 
 
 DEFAULT_TRANSPORT = "ros2"
@@ -147,6 +178,12 @@ def run(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no progress display")] = False,
     controller: Annotated[list[str] | None, typer.Option(
         help="attach a controller: AGENT=NAME (registered name or package.module:Class); repeatable")] = None,
+    callback_budget: Annotated[float, typer.Option(
+        min=0, help="wall-clock time one controller callback may take before it is reported [s]; 0: no limit")]
+        = CALLBACK_BUDGET,
+    disable_slow_controllers: Annotated[bool, typer.Option(
+        "--disable-slow-controllers", help="disable a controller whose callback took longer than "
+        "--callback-budget (after it returned), as if it had raised")] = False,
 ) -> None:
     """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
     stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed."""
@@ -164,6 +201,7 @@ def run(
         duration = 10.0
         err.print("no --duration or --steps: running 10 simulated seconds")
     sim = _load(world_file, backend, controller)
+    _check_endpoints(transport_obj, sim)
     total = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     show_progress = not quiet and total is not None
     t0 = time.perf_counter()
@@ -189,6 +227,10 @@ def run(
                   "prints the results", markup=False, soft_wrap=True)
 
     sim.control.paused = paused  # the simulation's own control: transports pause, step and stop through it
+    try:
+        sim.dispatch.budget = CallbackBudget(callback_budget, disable_slow_controllers)
+    except BudgetError as e:
+        raise _fail([f"--callback-budget: {e}"]) from None
     out.print(f"sigcore {__version__}: world '{sim.world.name}' ({world_file}) on backend '{backend}', "
               f"timestep {sim.dt} s")
     try:
@@ -208,15 +250,24 @@ def run(
               f"real-time factor: {report.real_time_factor:.1f}")
     if report.stopped_by in ("SIGINT", "SIGTERM"):
         out.print(f"  stopped:  by {report.stopped_by} at t = {report.sim_time:.3f} s")
+    if report.error is not None:
+        out.print(f"  stopped:  by an error at t = {report.sim_time:.3f} s (not in user code: see the log): "
+                  f"{report.error}")
     for f in report.failures:
         out.print(f"  controller of '{f.agent}' disabled ({f.callback} at t={f.time:.3f} s): {f.error}")
+    for s in report.slow:
+        out.print(f"  controller of '{s.agent}' was slow: {s.count} callback(s) over the budget of {s.budget:g} s, "
+                  f"the longest {s.longest:.3f} s ({s.callback})")
+    for ff in report.feature_failures:
+        out.print(f"  {ff.line()}")
     for name, summary in report.summary.items():
         if summary:
             out.print(f"  {name}: {summary}")
-    for feature in sim.features.values():
-        for line in feature.report():
-            out.print(line, markup=False, highlight=False)
-    if any(feature.outcome() is False for feature in sim.features.values()):
+    for line in report.report_lines:
+        out.print(line)
+    if report.error is not None:
+        raise typer.Exit(3)  # the run could not go on (a transport or a bug), the report above says why
+    if report.outcome is False:
         raise typer.Exit(1)  # the world's task failed (e.g. the referee's result is not 'succeeded')
 
 
@@ -224,10 +275,16 @@ def run(
 def check(
     world_file: WorldPath,
     backend: Annotated[str, typer.Option(help="backend to build it with", callback=_check_backend)] = "mujoco",
+    transport: Annotated[str | None, typer.Option(
+        help=f"transport whose endpoints to check; default '{DEFAULT_TRANSPORT}' when it can start; 'none'")] = None,
 ) -> None:
-    """Validate a world file: syntax, references, controllers, plugins, and that the backend builds it."""
+    """Validate a world file: syntax, references, controllers, plugins, that the backend builds it, and that the
+    transport can create every endpoint (valid ROS names, none used twice)."""
+    transport_obj = _transport(transport)
     sim = _load(world_file, backend)
-    out.print(f"{world_file}: ok ({len(sim.agents)} agents, built with '{backend}')")
+    _check_endpoints(transport_obj, sim)
+    with_transport = f", endpoints of '{transport_obj.name}' checked" if transport_obj is not None else ""
+    out.print(f"{world_file}: ok ({len(sim.agents)} agents, built with '{backend}'{with_transport})")
 
 
 @app.command()
@@ -311,9 +368,9 @@ def plugins_cmd() -> None:
     table = Table(title="sigcore plugins (entry-point group 'sigcore')")
     for col in ("plugin", "distribution", "version", "provides"):
         table.add_column(col)
-    for info in infos:
+    for info in infos:  # cells as Text: a plugin's names and errors are never read as markup
         status = ", ".join(info.provided()) or "-" if info.loaded else f"FAILED: {info.error}"
-        table.add_row(info.name, info.distribution, info.version, status)
+        table.add_row(*(Text(cell) for cell in (info.name, info.distribution, info.version, status)))
     out.print(table)
     if not infos:
         out.print("no plugins installed (pip install sigcore-backend-mujoco)")

@@ -4,9 +4,9 @@ A plugin is a module (or any object) with ``@sigcore.hookimpl`` functions named 
 :mod:`sigcore.hookspecs`. Installed plugins are found through entry points of group ``sigcore`` by
 :func:`load_plugins`; nothing loads at import time, and every lookup (:func:`backends`, :func:`get_backend`,
 ...) loads first. Each plugin's registration hooks are called once, on their own, when the plugin is added: so
-a plugin that fails to import or whose hook raises is disabled and reported by name (:func:`plugin_infos`)
-while the others load, and what each plugin provides is known. When two plugins register the same name, the
-first one loaded keeps it and a warning names both.
+a plugin that fails to import or whose hook raises (``sys.exit`` included) is disabled and reported by name
+(:func:`plugin_infos`) while the others load, and what each plugin provides is known. When two plugins register
+the same name, the first one loaded keeps it and a warning names both.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ import pluggy
 
 from . import hookspecs
 from .errors import SigcoreError
+from .isolation import USER_ERRORS, describe
 
 if TYPE_CHECKING:
     from .backend import Backend
@@ -206,8 +207,8 @@ def _load_entry_point(ep: importlib.metadata.EntryPoint) -> None:
         return
     try:
         plugin = ep.load()
-    except Exception as e:  # a broken third-party plugin must not stop the others
-        rec.error = f"importing '{ep.value}' raised {type(e).__name__}: {e}"
+    except USER_ERRORS as e:  # a broken third-party plugin (even one calling sys.exit) must not stop the others
+        rec.error = f"importing '{ep.value}' raised {describe(e)}"
         _state.records.append(rec)
         log.warning("sigcore plugin %s failed to load and is disabled: %s", rec.info().describe(), rec.error)
         return
@@ -265,8 +266,8 @@ def _scan(rec: _Record, plugin: object) -> str | None:
                 return f"{hook_name} must not be a hook wrapper"
             try:
                 impl.function(*(kwargs[arg] for arg in impl.argnames))
-            except Exception as e:
-                return f"{hook_name} raised {type(e).__name__}: {e}"
+            except USER_ERRORS as e:
+                return f"{hook_name} raised {describe(e)}"
         rec.found[kind] = found
     return None
 
@@ -410,18 +411,20 @@ def add_commands(cli: Any) -> None:
     for impl in pm.hook.sigcore_register_commands.get_hookimpls():
         try:
             impl.function(*({"cli": cli}[arg] for arg in impl.argnames))
-        except Exception as e:
+        except USER_ERRORS as e:
             who = infos[impl.plugin_name].describe() if impl.plugin_name in infos else f"'{impl.plugin_name}'"
-            log.warning("sigcore plugin %s: sigcore_register_commands raised %s: %s; its commands are "
-                        "missing", who, type(e).__name__, e)
+            log.warning("sigcore plugin %s: sigcore_register_commands raised %s; its commands are missing", who,
+                        describe(e))
 
 
 def notify(hook: str, **kwargs: Any) -> None:
     """Call world-level event hook ``hook`` (e.g. ``sigcore_simulation_started``) on every plugin, one by one: a
-    plugin whose hook raises is logged by name and the others are still called; the simulation goes on."""
+    plugin whose hook raises (or calls ``sys.exit``) is logged by name and the others are still called; the
+    simulation goes on."""
     load_plugins()
     for impl in getattr(pm.hook, hook).get_hookimpls():
         try:
             impl.function(**{k: v for k, v in kwargs.items() if k in impl.argnames})
-        except Exception as e:
-            log.error("plugin '%s' raised in %s: %s: %s", impl.plugin_name, hook, type(e).__name__, e)
+        except USER_ERRORS as e:
+            log.error("plugin '%s' raised in %s: %s", impl.plugin_name, hook, describe(e))
+            log.debug("traceback of plugin '%s' in %s", impl.plugin_name, hook, exc_info=True)

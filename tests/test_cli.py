@@ -188,10 +188,12 @@ def test_a_failing_feature_is_named(tmp_path: Path) -> None:
 
 
 def test_a_world_the_backend_cannot_build_is_reported_as_such(tmp_path: Path) -> None:
-    """A mesh file the engine cannot read is reported as the backend failing to build the world, exit 2."""
-    (tmp_path / "bad.stl").write_text("this is not a mesh\n")
+    """A mesh the engine cannot use (it passes the core's checks) is reported as the backend failing to build the
+    world, at the entity's element (file:line:column), exit 2."""
+    (tmp_path / "bad.obj").write_text("v 0 0 0\n" * 4 + "f 1 2 3\nf 1 2 4\n")  # all vertices in one point
     world = tmp_path / "w.xml"
-    world.write_text('<world name="badmesh">\n  <object name="thing" mesh="bad.stl" pose="0 0 0.1"/>\n</world>\n')
+    world.write_text('<world name="badmesh">\n  <object name="thing" mesh="bad.obj" pose="0 0 0.1"/>\n</world>\n')
     r = sigcore("check", str(world))
-    assert r.returncode == 2 and f"{world}: cannot build the world with backend 'mujoco': object 'thing'" in r.stderr
+    assert r.returncode == 2 and f"{world}:2:3: cannot build the world with backend 'mujoco': object 'thing'" \
+        in r.stderr
     assert "Traceback" not in r.stderr

@@ -272,7 +272,7 @@ def test_empty_path_is_an_issue(tmp_path: Path) -> None:
 def test_scalars_reject_nan_and_infinity(tmp_path: Path, attribute: str, value: str) -> None:
     """No float attribute accepts NaN or infinity, even one with only a lower bound."""
     path = _world(tmp_path, f'<world><object name="o" mesh="m.obj" {attribute}="{value}"/></world>')
-    (tmp_path / "m.obj").write_text("v 0 0 0\n")
+    (tmp_path / "m.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n")
     [issue] = _issues(path)
     assert issue.attribute == attribute and "not a finite number" in issue.message
 

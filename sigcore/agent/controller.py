@@ -9,6 +9,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
+from ..isolation import USER_ERRORS, describe
 from .events import CollisionEvent, Message
 from .exceptions import ControllerError
 
@@ -62,9 +63,9 @@ def resolve_controller(spec: str, registered: dict[str, type]) -> type:
         except ImportError as e:
             raise ControllerError(f"cannot import module '{module_name}' for controller '{spec}': {e}. "
                                   + _unknown(spec, registered)) from None
-        except Exception as e:  # the user's module raised while importing
-            raise ControllerError(f"importing '{module_name}' for controller '{spec}' raised "
-                                  f"{type(e).__name__}: {e}") from None
+        except USER_ERRORS as e:  # the user's module raised (or called sys.exit) while importing
+            raise ControllerError(f"importing '{module_name}' for controller '{spec}' raised {describe(e)}") \
+                from None
         try:
             cls = getattr(module, attr)
         except AttributeError:

@@ -2,27 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from enum import StrEnum
-from typing import Any
 
-from ..errors import SigcoreError
+from ..errors import ApiError, SigcoreError
 
-
-class ApiError(SigcoreError, ValueError):
-    """A request to the agent API was refused (unknown name, NaN, out of range, wrong mode...).
-
-    The simulation is unaffected; transports turn this into an error response.
-
-    Args:
-        message: What was wrong and what would be valid.
-        fields: Response fields the error response carries besides ``success`` and ``message`` (e.g. the residual
-            of a failed IK solve); those the response type does not have are dropped. Empty by default.
-    """
-
-    def __init__(self, message: str = "", fields: Mapping[str, Any] | None = None) -> None:
-        super().__init__(message)
-        self.fields: dict[str, Any] = dict(fields or {})
+__all__ = ["ApiError", "ControllerError", "GraspError", "GraspRefusal"]
 
 
 class GraspRefusal(StrEnum):

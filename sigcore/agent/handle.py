@@ -15,6 +15,7 @@ import numpy as np
 
 from ..backend import MAIN, Array
 from ..geometry import angle_between, cross, normalized, quat_from_axis_angle, quat_rotate
+from ..text import quote
 from .exceptions import ApiError
 
 if TYPE_CHECKING:
@@ -24,6 +25,9 @@ if TYPE_CHECKING:
 LIMITS = {"position": 1e4, "velocity": 1e3, "angular velocity": 1e3, "force": 1e6, "torque": 1e6,
           "acceleration": 1e4}
 """Largest magnitude accepted per component, by quantity (a guard against values that would blow the solver up)."""
+
+MIN_MASS = 1e-3
+"""Smallest total mass ``set_mass`` accepts [kg]: lighter bodies make the engines' inertia matrices singular."""
 
 
 def _vec(values: Iterable[float], what: str, n: int = 3) -> Array:
@@ -46,7 +50,7 @@ def _num(value: float, what: str, *, low: float | None = None, high: float | Non
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ApiError(f"{what} must be a number, got {value!r}") from None
+        raise ApiError(f"{what} must be a number, got {quote(repr(value))}") from None
     if not math.isfinite(v):
         raise ApiError(f"{what} must be a finite number, got {v}")
     if low is not None and (v <= low if strict_low else v < low):
@@ -105,7 +109,7 @@ class SimObj:
             return None
         parts = self.sim.backend.parts(self.name)
         if part not in parts:
-            raise ApiError(f"'{self.name}' has no part '{part}'; parts: {', '.join([MAIN, *parts[1:]])}")
+            raise ApiError(f"'{self.name}' has no part {quote(part)}; parts: {', '.join([MAIN, *parts[1:]])}")
         return part
 
     def _dynamic(self, what: str) -> None:
@@ -228,7 +232,7 @@ class SimObj:
     def add_force_to_part(self, part: str, f: Iterable[float]) -> None:
         """Add a world-frame force [N] at the centre of mass of ``part``."""
         if self._part(part) is None and part not in ("", MAIN):
-            raise ApiError(f"unknown part '{part}'")
+            raise ApiError(f"unknown part {quote(part)}")
         self.add_force(f, part=part)
 
     def set_torque(self, t: Iterable[float]) -> None:
@@ -258,9 +262,9 @@ class SimObj:
         return self.sim.backend.get_mass(self.name)
 
     def set_mass(self, mass: float) -> None:
-        """Set the total mass [kg] (> 0; parts are scaled together)."""
+        """Set the total mass [kg] (``MIN_MASS`` to 1e6; parts are scaled together)."""
         self._body()
-        self.sim.backend.set_mass(self.name, _num(mass, "mass [kg]", low=0.0, strict_low=True, high=1e6))
+        self.sim.backend.set_mass(self.name, _num(mass, "mass [kg]", low=MIN_MASS, high=1e6))
 
     def gravity_mode(self) -> bool:
         """Whether gravity acts on the entity."""
@@ -323,7 +327,7 @@ class SimObj:
         """
         axes = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
         if axis not in axes:
-            raise ApiError(f"axis must be one of x, y, z, got {axis!r}")
+            raise ApiError(f"axis must be one of x, y, z, got {quote(axis)}")
         vec = _vec(v, "vector")
         if float(np.linalg.norm(vec)) == 0.0:
             raise ApiError("vector must be non-zero")

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..backend import MAIN, Array
 from ..geometry import quat_conj, quat_mul
+from ..text import quote
 from .exceptions import ApiError, GraspError, GraspRefusal
 from .handle import SimObj, _num, _vec
 
@@ -24,7 +25,7 @@ class RobotObj(SimObj):
     def _joint(self, joint: str) -> str:
         joints = self.sim.backend.joints(self.name)
         if joint not in joints:
-            raise ApiError(f"'{self.name}' has no joint '{joint}'; joints: {', '.join(joints) or 'none'}")
+            raise ApiError(f"'{self.name}' has no joint {quote(joint)}; joints: {', '.join(joints) or 'none'}")
         return joint
 
     def joint_angle(self, joint: str) -> float:
@@ -152,13 +153,13 @@ class RobotObj(SimObj):
         model = self.sim.robot_model(self.name)
         grippers = {g.part: g for g in model.grippers}
         if part not in self.sim.backend.parts(self.name):
-            raise GraspError(GraspRefusal.UNKNOWN_PART, f"'{self.name}' has no part '{part}'; grippers: "
+            raise GraspError(GraspRefusal.UNKNOWN_PART, f"'{self.name}' has no part {quote(part)}; grippers: "
                              f"{', '.join(grippers) or 'none'}")
         if part not in grippers:
-            raise GraspError(GraspRefusal.NOT_A_GRIPPER, f"part '{part}' is not a gripper; grippers: "
+            raise GraspError(GraspRefusal.NOT_A_GRIPPER, f"part {quote(part)} is not a gripper; grippers: "
                              f"{', '.join(grippers) or 'none'}")
         if obj not in self.sim.entity_names or obj == self.name:
-            raise GraspError(GraspRefusal.UNKNOWN_OBJECT, f"no object '{obj}'; graspable objects: "
+            raise GraspError(GraspRefusal.UNKNOWN_OBJECT, f"no object {quote(obj)}; graspable objects: "
                              f"{', '.join(self.sim.graspable) or 'none'}")
         grasps = self.sim.grasps
         held = grasps.holding(self.name, part)
@@ -184,7 +185,7 @@ class RobotObj(SimObj):
     def release(self, part: str) -> str | None:
         """Release what ``part`` holds; returns the released object's name, or None if it held nothing."""
         if part not in self.grippers():
-            raise ApiError(f"part '{part}' is not a gripper of '{self.name}'; grippers: "
+            raise ApiError(f"part {quote(part)} is not a gripper of '{self.name}'; grippers: "
                            f"{', '.join(self.grippers()) or 'none'}")
         obj = self.sim.grasps.release(self.name, part)
         if obj is not None:
@@ -198,7 +199,7 @@ class RobotObj(SimObj):
             if arm in (g.part, g.side):
                 return g.part
         valid = [g.part for g in grippers] + [g.side for g in grippers if g.side]
-        raise ApiError(f"no gripper '{arm}' on '{self.name}'; valid: {', '.join(valid) or 'none'}")
+        raise ApiError(f"no gripper {quote(arm)} on '{self.name}'; valid: {', '.join(valid) or 'none'}")
 
     def relative_rotation(self, part: str) -> Array:
         """Orientation of ``part`` relative to the main part (w, x, y, z)."""

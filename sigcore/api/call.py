@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel, ValidationError
 
 from ..agent.exceptions import ApiError
+from ..text import clip
 from .deferred import Deferred
 from .table import ApiEntry
 
@@ -46,14 +47,16 @@ def call(sim: Simulation, entry: ApiEntry, agent: str,
         if isinstance(fields, Deferred):
             return fields
         out: dict[str, Any] = {**fields, "success": True, "message": ""}
+        kind = ""
     except ValidationError as e:
-        out = {"success": False, "message": _validation_message(entry, e)}
+        out, kind = {"success": False, "message": _validation_message(entry, e)}, "invalid request"
     except ApiError as e:
-        out = _refused(entry, e)
-    except Exception as e:  # a bug must not stop the simulation either; report it loudly
-        log.exception("handler of %s%s raised", agent, entry.suffix)
-        out = {"success": False, "message": f"internal error in {entry.suffix}: {type(e).__name__}: {e}"}
-    return _complete(entry, agent, out)
+        out, kind = _refused(entry, e), type(e).__name__
+    except (Exception, SystemExit) as e:  # a bug (or a feature's sys.exit) must not stop the simulation
+        kind = f"internal error {type(e).__name__}"
+        log.exception("handler of %s%s raised", agent, entry.suffix, extra=log_key(agent + entry.suffix, kind))
+        out = {"success": False, "message": f"internal error in {entry.suffix}: {type(e).__name__}: {clip(str(e))}"}
+    return _complete(entry, agent, out, kind)
 
 
 def _refused(entry: ApiEntry, e: ApiError) -> dict[str, Any]:
@@ -62,9 +65,15 @@ def _refused(entry: ApiEntry, e: ApiError) -> dict[str, Any]:
     return {**{k: v for k, v in e.fields.items() if k in known}, "success": False, "message": str(e)}
 
 
-def _complete(entry: ApiEntry, agent: str, out: dict[str, Any]) -> dict[str, Any]:
+def log_key(endpoint: str, kind: str) -> dict[str, str]:
+    """The ``extra=`` of a log record about a request: transports log each (endpoint, kind) once, not per text."""
+    return {"endpoint": endpoint, "kind": kind}
+
+
+def _complete(entry: ApiEntry, agent: str, out: dict[str, Any], kind: str) -> dict[str, Any]:
     if not out["success"]:
-        log.warning("%s%s refused: %s", agent, entry.suffix, out["message"])
+        log.warning("%s%s refused: %s", agent, entry.suffix, clip(out["message"]),
+                    extra=log_key(agent + entry.suffix, kind))
     if entry.response is not None:
         defaults = entry.response().model_dump()
         return {**defaults, **out}
@@ -78,14 +87,17 @@ def finish(sim: Simulation, entry: ApiEntry, agent: str, deferred: Deferred) -> 
         if fields is None:
             return None
         out: dict[str, Any] = {**fields, "success": True, "message": ""}
+        kind = ""
     except ApiError as e:
-        out = _refused(entry, e)
+        out, kind = _refused(entry, e), type(e).__name__
     except TimeoutError as e:
-        out = {"success": False, "message": str(e)}
-    except Exception as e:
-        log.exception("deferred handler of %s%s raised", agent, entry.suffix)
-        out = {"success": False, "message": f"internal error in {entry.suffix}: {type(e).__name__}: {e}"}
-    return _complete(entry, agent, out)
+        out, kind = {"success": False, "message": str(e)}, "timeout"
+    except (Exception, SystemExit) as e:
+        kind = f"internal error {type(e).__name__}"
+        log.exception("deferred handler of %s%s raised", agent, entry.suffix,
+                      extra=log_key(agent + entry.suffix, kind))
+        out = {"success": False, "message": f"internal error in {entry.suffix}: {type(e).__name__}: {clip(str(e))}"}
+    return _complete(entry, agent, out, kind)
 
 
 def call_and_wait(sim: Simulation, entry: ApiEntry, agent: str, request: BaseModel | dict[str, Any] | None,

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 from ..agent.exceptions import ApiError
 from ..agent.handle import SimObj
 from ..agent.robot import RobotObj
+from ..text import quote
 
 if TYPE_CHECKING:
     from ..sim.simulation import Simulation
@@ -204,9 +205,9 @@ def service_name(sim: Simulation, name: str) -> str:
     if len(matches) == 1:
         return matches[0]
     if matches:
-        raise ApiError(f"service name '{name}' matches {', '.join(sorted(matches))}, which differ only in case; "
+        raise ApiError(f"service name {quote(name)} matches {', '.join(sorted(matches))}, which differ only in case; "
                        "give the exact name")
-    raise ApiError(f"no service '{name}'; services: {', '.join(sorted(sim.services)) or 'none'} (names are "
+    raise ApiError(f"no service {quote(name)}; services: {', '.join(sorted(sim.services)) or 'none'} (names are "
                    "compared ignoring case)")
 
 

@@ -6,11 +6,13 @@ import heapq
 import logging
 import math
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from time import perf_counter
 from typing import TYPE_CHECKING
 
 from ..agent.controller import Controller, overridden
 from ..agent.events import CollisionEvent, Message
+from ..isolation import USER_ERRORS, CallbackBudget, describe
 
 if TYPE_CHECKING:
     from ..agent.handle import SimObj
@@ -37,8 +39,30 @@ class ControllerFailure:
     traceback: str
 
 
+@dataclass(frozen=True)
+class SlowCallbacks:
+    """An agent's controller callbacks that took longer than the budget.
+
+    Attributes:
+        agent: The agent.
+        count: How many calls took longer than the budget.
+        longest: The longest of them [s] (wall-clock).
+        callback: The callback of the longest (``on_action``...).
+        time: Simulation time of the first [s].
+        budget: The budget in force [s].
+    """
+
+    agent: str
+    count: int
+    longest: float
+    callback: str
+    time: float
+    budget: float
+
+
 class Dispatcher:
-    """Calls each controller's overridden callbacks at the right steps; disables a controller that raises."""
+    """Calls each controller's overridden callbacks at the right steps; disables a controller that raises (or calls
+    ``sys.exit``), and reports (or disables, see :class:`CallbackBudget`) one whose callback takes too long."""
 
     def __init__(self, timestep: float) -> None:
         self._dt = timestep
@@ -49,6 +73,19 @@ class Dispatcher:
         self.message_listeners: dict[str, Controller] = {}
         self._init: list[str] = []
         self.failures: list[ControllerFailure] = []
+        self.slow: dict[str, SlowCallbacks] = {}
+        """Agents whose callbacks took longer than :attr:`budget`, by agent."""
+        self.budget = CallbackBudget()
+
+    @property
+    def budget(self) -> CallbackBudget:
+        """The wall-clock budget of one callback (default :data:`CALLBACK_BUDGET`, reported, not disabled)."""
+        return self._budget
+
+    @budget.setter
+    def budget(self, budget: CallbackBudget) -> None:
+        self._budget = budget
+        self._limit = budget.seconds if budget.seconds > 0 else math.inf
 
     def add(self, handle: SimObj, controller: Controller) -> None:
         """Attach ``controller`` to the agent of ``handle``; only its overridden callbacks will be called."""
@@ -111,11 +148,32 @@ class Dispatcher:
 
     def _call(self, name: str, callback: str, time: float, *args: object) -> object:
         controller, handle = self._controllers[name]
+        start = perf_counter()
         try:
-            return getattr(controller, callback)(handle, *args)
-        except Exception as e:
-            self._fail(name, callback, time, f"{type(e).__name__}: {e}", traceback.format_exc())
+            result = getattr(controller, callback)(handle, *args)
+        except USER_ERRORS as e:  # sys.exit in a controller disables it too; Ctrl-C is the user's
+            self._fail(name, callback, time, describe(e), traceback.format_exc())
             return None
+        spent = perf_counter() - start
+        if spent > self._limit:
+            self._slow(name, callback, time, spent)
+        return result
+
+    def _slow(self, name: str, callback: str, time: float, spent: float) -> None:
+        budget = self._budget.seconds
+        seen = self.slow.get(name)
+        if seen is None:
+            self.slow[name] = SlowCallbacks(name, 1, spent, callback, time, budget)
+            log.warning("controller of agent '%s' took %.3f s of wall time in %s at t=%.3f s, over the callback "
+                        "budget of %g s: the whole simulation waited for it (sigcore run --callback-budget S, "
+                        "--disable-slow-controllers)", name, spent, callback, time, budget)
+        else:
+            longest = spent > seen.longest
+            self.slow[name] = replace(seen, count=seen.count + 1, longest=max(spent, seen.longest),
+                                      callback=callback if longest else seen.callback)
+        if self._budget.disable:
+            self._fail(name, callback, time, f"took {spent:.3f} s of wall time, over the callback budget of "
+                       f"{budget:g} s", "")
 
     def _fail(self, name: str, callback: str, time: float, error: str, tb: str) -> None:
         failure = ControllerFailure(name, callback, time, error, tb)

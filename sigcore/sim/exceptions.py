@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..errors import SigcoreError
+from ..isolation import describe
 
 
 class SimulationError(SigcoreError, RuntimeError):
@@ -16,9 +17,9 @@ class FeatureError(SimulationError):
     Attributes:
         feature: The feature's name (``<plugin name="...">``).
         where: ``file:line`` of its ``<plugin>`` element.
-        cause: What the feature's constructor raised.
+        cause: What the feature's constructor raised (``SystemExit`` too: a feature calling ``sys.exit``).
     """
 
-    def __init__(self, feature: str, where: str, cause: Exception) -> None:
+    def __init__(self, feature: str, where: str, cause: BaseException) -> None:
         self.feature, self.where, self.cause = feature, where, cause
-        super().__init__(f"{where}: feature '{feature}' failed while being created: {type(cause).__name__}: {cause}")
+        super().__init__(f"{where}: feature '{feature}' failed while being created: {describe(cause)}")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import time as _time
 from collections.abc import Callable
 from contextlib import nullcontext
@@ -9,10 +10,14 @@ from dataclasses import dataclass, field
 
 __all__ = ["RunControl", "RunReport", "run"]
 
+from ..isolation import USER_ERRORS, describe
 from ..transport import Transport
 from .control import RunControl, stop_on_signals
-from .dispatch import ControllerFailure
+from .dispatch import ControllerFailure, SlowCallbacks
+from .feature_guard import FeatureFailure
 from .simulation import Simulation
+
+log = logging.getLogger("sigcore")
 
 
 @dataclass(frozen=True)
@@ -29,7 +34,15 @@ class RunReport:
         sim_time_run: Simulated time covered by this run [s].
         stopped_by: Why the run ended before its duration or steps: ``"SIGINT"`` or ``"SIGTERM"`` for a signal,
             ``"request"`` for ``control.stop`` set by a transport (QUITTING) or a feature (e.g. the referee at the
-            end of its task); None when it ran to its end.
+            end of its task), ``"error"`` when something that is not user code raised (see ``error``); None when
+            it ran to its end.
+        feature_failures: Features disabled during the run (or while reporting at its end).
+        slow: Controllers whose callbacks took longer than the callback budget (``sim.dispatch.budget``).
+        report_lines: The features' report lines (``Feature.report``).
+        outcome: The world's verdict (:meth:`Simulation.outcome`): False if a feature says the task failed.
+        error: When ``stopped_by`` is ``"error"``: what raised (``Type: message``), from the transport, the
+            backend or an observer no feature owns (a bug in sigcore or in a transport plugin); its traceback is
+            logged. None otherwise.
     """
 
     agents: dict[str, list[str]]
@@ -40,6 +53,11 @@ class RunReport:
     summary: dict[str, object] = field(default_factory=dict)
     sim_time_run: float = 0.0
     stopped_by: str | None = None
+    feature_failures: list[FeatureFailure] = field(default_factory=list)
+    slow: list[SlowCallbacks] = field(default_factory=list)
+    report_lines: list[str] = field(default_factory=list)
+    outcome: bool | None = None
+    error: str | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -57,7 +75,10 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
     The simulation is started (:meth:`Simulation.start`), then the transport; at the end the transport is stopped
     and then the simulation (:meth:`Simulation.stop`), however the run ends. SIGINT and SIGTERM end it like a
     ``control.stop`` request (see :func:`sigcore.sim.control.stop_on_signals`), so the report is never lost; a second
-    signal while stopping raises ``KeyboardInterrupt``.
+    signal while stopping raises ``KeyboardInterrupt``. User code never ends a run: a controller or a feature that
+    raises (or calls ``sys.exit``) is disabled and the run goes on. Anything else that raises while starting the
+    transport or stepping (the transport, the backend, a bug) ends the run with ``stopped_by="error"`` and the
+    error in the report; its traceback is logged.
 
     Args:
         sim: The simulation.
@@ -77,23 +98,33 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
     with stop_on_signals(control) if handle_signals else nullcontext():
         sim.start()
         try:
-            if transport is not None:
-                transport.start(sim)
+            error = None
+            wall0 = _time.perf_counter()
             try:
-                if started is not None:
-                    started(sim)
-                wall = _loop(sim, target, start_step, realtime_factor, control, transport, progress, progress_every)
-            finally:
                 if transport is not None:
-                    transport.stop()
+                    transport.start(sim)
+                try:
+                    if started is not None:
+                        started(sim)
+                    wall = _loop(sim, target, start_step, realtime_factor, control, transport, progress,
+                                 progress_every)
+                finally:
+                    if transport is not None:
+                        transport.stop()
+            except USER_ERRORS as e:  # not user code (that is contained where it is called): a transport or a bug
+                error = describe(e)
+                log.error("the run stopped at t=%.3f s: %s", sim.time, error, exc_info=True)
+                wall = _time.perf_counter() - wall0
         finally:
             sim.stop()
     kinds: dict[str, list[str]] = {}
     for name, handle in sim.agents.items():
         kinds.setdefault(handle.kind, []).append(name)
-    stopped_by = (control.stop_reason or "request") if control.stop else None
-    return RunReport(kinds, sim.step_count - start_step, sim.time, wall, list(sim.dispatch.failures),
-                     sim.summary(), sim.time - start_time, stopped_by)
+    stopped_by = "error" if error is not None else (control.stop_reason or "request") if control.stop else None
+    summary, lines, outcome = sim.summary(), sim.report_lines(), sim.outcome()
+    return RunReport(kinds, sim.step_count - start_step, sim.time, wall, list(sim.dispatch.failures), summary,
+                     sim.time - start_time, stopped_by, list(sim.feature_guard.failures),
+                     list(sim.dispatch.slow.values()), lines, outcome, error)
 
 
 def _loop(sim: Simulation, target: int | None, start_step: int, realtime_factor: float | None, control: RunControl,

@@ -18,7 +18,9 @@ from ..api.sources import Source
 from ..api.table import ApiEntry, api_table
 from ..backend import Array, Backend
 from ..feature import Feature
+from ..isolation import USER_ERRORS, describe
 from ..publish import Publication, Publications, Publisher
+from ..text import quote
 from ..world.exceptions import WorldError, WorldIssue
 from ..world.models import Object, Robot, World
 from ..world.urdf import UrdfModel
@@ -27,6 +29,7 @@ from .control import RunControl
 from .dispatch import Dispatcher
 from .drive import DriveState
 from .exceptions import FeatureError
+from .feature_guard import OBSERVER_LISTS, FeatureFailure, FeatureGuard
 from .frames import Frames
 from .grasps import Grasps
 from .lidar import LidarSensor, Scan
@@ -95,10 +98,13 @@ class Simulation:
         self.odometry: dict[str, WheelOdometry] = {}
         self._dt_ns = round(self.dt * 1e9)
         self.publications = Publications(lambda: self.step_count * self._dt_ns, self._attach_sources)
-        self._sources: list[tuple[Source, dict[str, Publisher]]] = []
+        self._sources: list[tuple[Source, dict[str, Publisher], str | None]] = []  # (source, publishers, feature)
         self.frames = Frames(self)
         self._attach_controllers(controllers or {})
         self.features: dict[str, Feature] = {}
+        self.feature_guard = FeatureGuard()
+        """Which feature attached which observer and service; the features disabled while running."""
+        self._feature_entries: dict[str, list[ApiEntry]] = {}
         self._create_features()
         self._declare_agent_publications()
         self._started = False  # between start() and stop()
@@ -128,9 +134,10 @@ class Simulation:
             except ControllerError as e:
                 issues.append(self._issue(agent.name, "controller", f"agent '{agent.name}': {e}"))
                 continue
-            except Exception as e:
+            except USER_ERRORS as e:  # its constructor raised or called sys.exit
+                detail = describe(e).partition(": ")[2]  # the message, or that sys.exit was called
                 issues.append(self._issue(agent.name, "controller", f"controller '{spec}' of agent '{agent.name}' "
-                                          f"raised {type(e).__name__} while being created: {e}"))
+                                          f"raised {type(e).__name__} while being created: {detail}"))
                 continue
             self.dispatch.add(self.agents[agent.name], controller)
         if issues:
@@ -159,19 +166,32 @@ class Simulation:
             except WorldError as e:
                 issues.extend(e.issues)
                 continue
+            except USER_ERRORS as e:  # its config model's own validator failed: the feature's code, not the file
+                raise FeatureError(cfg.name, f"{self.world.source}:{cfg.line}", e) from e
+            before = self._attached()
             try:
                 self.features[cfg.name] = cls(self, config)
+                self._feature_entries[cfg.name] = list(cls.api_entries())
             except FieldError as e:
                 issues.append(plugin_issue(self.world, cfg, e.field, str(e)))
             except (ValueError, KeyError, TypeError) as e:
                 issues.append(plugin_issue(self.world, cfg, None, f"plugin '{cfg.name}': {e}"))
-            except Exception as e:  # not its attributes: the feature itself failed
+            except USER_ERRORS as e:  # not its attributes: the feature itself failed (or called sys.exit)
                 raise FeatureError(cfg.name, f"{self.world.source}:{cfg.line}", e) from e
+            observers, services = self._attached()
+            self.feature_guard.adopt(cfg.name, [o for i, o in observers.items() if i not in before[0]],
+                                     services - before[1])
         if issues:
             raise WorldError(issues)
 
+    def _attached(self) -> tuple[dict[int, object], set[str]]:
+        """The observers (by id) and viewer services attached so far (to tell which a feature's constructor
+        added)."""
+        return {id(o): o for attr in OBSERVER_LISTS for o in getattr(self, attr)}, set(self.services)
+
     def _declare_agent_publications(self) -> None:
         """One publication per agent for every ``publish`` entry of the API table (the core's and the features')."""
+        owners = {id(e): name for name, entries in self._feature_entries.items() for e in entries}
         for entry in self.api_entries():
             if entry.direction != "publish" or entry.source is None:
                 continue
@@ -182,11 +202,16 @@ class Simulation:
                         entry.name_for(agent), entry.ros_type, entry.qos, entry.doc, entry.origin, agent,
                         entry.request))
             if publishers:
-                self._sources.append((entry.source, publishers))
+                self._sources.append((entry.source, publishers, owners.get(id(entry))))
 
     def _attach_sources(self) -> None:
-        for source, publishers in self._sources:
+        """Attach the sources of the agents' publications (when the first sink connects); the observers that a
+        feature's source attaches are that feature's."""
+        for source, publishers, feature in self._sources:
+            before = self._attached()[0]
             source.attach(self, publishers)
+            if feature is not None:
+                self.feature_guard.adopt(feature, [o for i, o in self._attached()[0].items() if i not in before], ())
 
     # ------------------------------------------------------------------ lookups used by handles and the API
     @property
@@ -204,14 +229,15 @@ class Simulation:
         try:
             return self.agents[name]
         except KeyError:
-            raise ApiError(f"no agent '{name}'; agents: {', '.join(self.agents)}") from None
+            raise ApiError(f"no agent {quote(name)}; agents: {', '.join(self.agents)}") from None
 
     def robot(self, name: str) -> RobotObj:
         """Handle of a robot; ``ApiError`` listing the robots otherwise."""
         handle = self.agent(name)
         if not isinstance(handle, RobotObj):
             robots = [n for n, h in self.agents.items() if isinstance(h, RobotObj)]
-            raise ApiError(f"'{name}' is a {handle.kind}, not a robot; robots: {', '.join(robots) or 'none'}")
+            article = "an" if handle.kind[0] in "aeiou" else "a"
+            raise ApiError(f"'{name}' is {article} {handle.kind}, not a robot; robots: {', '.join(robots) or 'none'}")
         return handle
 
     def robot_model(self, name: str) -> Robot:
@@ -273,7 +299,7 @@ class Simulation:
     def send_msg(self, sender: str, to: str, text: str) -> None:
         """Queue a text message for agent ``to`` (delivered before the next step)."""
         if to not in self.agents:
-            raise ApiError(f"no agent '{to}' to send to; agents: {', '.join(self.agents)}")
+            raise ApiError(f"no agent {quote(to)} to send to; agents: {', '.join(self.agents)}")
         if not isinstance(text, str):
             raise ApiError(f"message text must be a string, got {type(text).__name__}")
         self._outbox.append(Message(sender, to, text, self.time))
@@ -291,7 +317,11 @@ class Simulation:
             for msg in outbox:
                 self.dispatch.message(msg)
                 for observer in self.message_observers:
-                    observer(msg)
+                    try:
+                        observer(msg)
+                    except USER_ERRORS as e:
+                        if not self._contain(observer, e, "message observer"):
+                            raise
 
     # ------------------------------------------------------------------ contacts
     def contact_triples(self) -> frozenset[tuple[str, str, str]]:
@@ -310,12 +340,46 @@ class Simulation:
             event = CollisionEvent(entity, part, other, self.time)
             self.dispatch.collision(event)
             for observer in self.collision_observers:
-                observer(event)
+                try:
+                    observer(event)
+                except USER_ERRORS as e:
+                    if not self._contain(observer, e, "collision observer"):
+                        raise
 
     # ------------------------------------------------------------------ stepping
     def add_step_observer(self, observer: StepObserver) -> None:
-        """Call ``observer(sim)`` after every step (features and transports; keep it cheap)."""
+        """Call ``observer(sim)`` after every step (features and transports; keep it cheap).
+
+        An observer that a feature attached (in its constructor, or a method of the feature) and that raises
+        disables that feature (see :meth:`disable_feature`); any other observer's exception (the core's, a
+        transport's, a library user's) propagates: :func:`sigcore.sim.run` then ends the run with the error in its
+        report."""
         self._step_observers.append(observer)
+
+    def _contain(self, observer: object, exc: BaseException, where: str) -> bool:
+        """``observer`` raised ``exc``: disable the feature that owns it and return True, or False if no feature
+        does (the caller re-raises)."""
+        feature = self.feature_guard.owner(observer, self.features)
+        if feature is None:
+            return False
+        self.disable_feature(feature, where, exc)
+        return True
+
+    def disable_feature(self, feature: str, where: str, exc: BaseException) -> FeatureFailure:
+        """Disable ``feature`` because ``where`` (``step observer``, ``reset``...) raised ``exc``: its observers are
+        detached (also from a list being iterated now), its viewer services removed, its ``reset`` no longer
+        called; its ``summary``, ``report`` and ``outcome`` are still asked at the end. Logged in one line.
+
+        Returns:
+            The failure, also in ``feature_guard.failures`` and the run's report.
+        """
+        guard = self.feature_guard
+        failure = guard.fail(feature, where, self.time, exc)
+        for attr in OBSERVER_LISTS:
+            setattr(self, attr, guard.detach(feature, getattr(self, attr), self.features))
+        for service in [name for name, owner in guard.services.items() if owner == feature]:
+            self.services.pop(service, None)
+        return failure
 
     def start(self) -> None:
         """Start a run: call every ``on_init`` not called yet, then every ``on_action`` due now, then fire
@@ -360,11 +424,19 @@ class Simulation:
                 if self.step_count % lidar.period_steps == 0:
                     scan = lidar.scan(backend, self.time)
                     for scan_observer in self.scan_observers:
-                        scan_observer(scan)
+                        try:
+                            scan_observer(scan)
+                        except USER_ERRORS as e:
+                            if not self._contain(scan_observer, e, "scan observer"):
+                                raise
             for odo in self.odometry.values():
                 odo.update(backend, self.step_count * self.dt)
-            for observer in self._step_observers:
-                observer(self)
+            for observer in self._step_observers:  # a try costs nothing until something raises (Python >= 3.11)
+                try:
+                    observer(self)
+                except USER_ERRORS as e:
+                    if not self._contain(observer, e, "step observer"):
+                        raise
 
     def reset(self) -> None:
         """Restore the world's initial state; time goes on forward. Grasps, forces and queued messages are
@@ -380,8 +452,12 @@ class Simulation:
             odo.reset()
         for drive in self._drives.values():
             drive.reset()
-        for feature in self.features.values():
-            feature.reset()
+        for name, feature in self.features.items():
+            if name not in self.feature_guard.disabled:
+                try:
+                    feature.reset()
+                except USER_ERRORS as e:
+                    self.disable_feature(name, "reset", e)
 
     def poses(self) -> dict[str, tuple[Array, Array]]:
         """Main-part pose of every entity (used to compare runs)."""
@@ -397,10 +473,40 @@ class Simulation:
     def api_entries(self) -> list[ApiEntry]:
         """The core API table plus the entries of this world's features (what transports expose)."""
         entries = list(api_table())
-        for feature in self.features.values():
-            entries.extend(feature.api_entries())
+        for feature_entries in self._feature_entries.values():
+            entries.extend(feature_entries)
         return entries
 
     def summary(self) -> dict[str, Any]:
-        """What each feature reports at the end of a run."""
-        return {name: f.summary() for name, f in self.features.items()}
+        """What each feature reports at the end of a run (a feature whose ``summary`` raises is disabled and left
+        out)."""
+        summaries = {}
+        for name, feature in self.features.items():
+            try:
+                summaries[name] = feature.summary()
+            except USER_ERRORS as e:
+                self.disable_feature(name, "summary", e)
+        return summaries
+
+    def report_lines(self) -> list[str]:
+        """The features' report lines (``Feature.report``), in world order; one whose ``report`` raises is disabled
+        and left out."""
+        lines: list[str] = []
+        for name, feature in self.features.items():
+            try:
+                lines.extend(str(line) for line in feature.report())
+            except USER_ERRORS as e:
+                self.disable_feature(name, "report", e)
+        return lines
+
+    def outcome(self) -> bool | None:
+        """The world's verdict from the features' ``outcome``: False if any says False, or raises (no verdict can
+        be trusted then; the feature is disabled); else True if any says True; else None."""
+        verdicts = []
+        for name, feature in self.features.items():
+            try:
+                verdicts.append(feature.outcome())
+            except USER_ERRORS as e:
+                self.disable_feature(name, "outcome", e)
+                verdicts.append(False)
+        return False if False in verdicts else True if True in verdicts else None

@@ -19,7 +19,9 @@ _TEXT = re.compile(r"\S")
 
 
 def _blank(match: re.Match[str]) -> str:
-    return "".join(c if c == "\n" else " " for c in match.group(0))
+    """Blank a comment, PI or DOCTYPE; a CDATA section keeps one mark where it starts, since it is text."""
+    blank = "".join(c if c == "\n" else " " for c in match.group(0))
+    return "C" + blank[1:] if match.group(0).startswith("<![CDATA[") and match.group(0)[9:-3].strip() else blank
 
 
 class SourceMap:

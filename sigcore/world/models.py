@@ -28,6 +28,10 @@ NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]*$"
 """Entity names become ROS 2 topic names (``<agent>_setPosition``): a letter, then letters, digits, ``_``."""
 
 
+MAX_GRAVITY = 1000.0
+"""Longest gravity vector a world may ask for [m/s^2] (about 100 g); beyond it the engines diverge."""
+
+
 def _numbers(count: int | None) -> BeforeValidator:
     def parse(value: object) -> object:
         if isinstance(value, str):
@@ -230,7 +234,7 @@ class Object(_Model):
     size: Floats | None = Field(default=None, description="sizes of the shape in [m]")
     mesh: Path | None = Field(default=None, description="mesh file, relative to the world file's directory")
     urdf: Path | None = Field(default=None, description="URDF file, relative to the world file's directory")
-    scale: float = Field(default=1.0, gt=0, description="mesh or URDF scale factor (not for shapes)")
+    scale: float = Field(default=1.0, ge=1e-3, le=1e3, description="mesh or URDF scale factor (not for shapes)")
     mass: float = Field(default=1.0, gt=0, le=1e5, description="in [kg] (ignored when static)")
     static: bool = Field(default=False, description="fixed in place, not moved by physics")
     graspable: bool = Field(default=False, description="grippers may grasp it")
@@ -305,6 +309,15 @@ class World(_Model):
     timestep: float = Field(default=0.002, gt=0, le=0.1, description="physics step in [s]")
     gravity: Vec3 = Field(default=(0.0, 0.0, -9.81), description="'x y z' acceleration in [m/s^2]")
     seed: int = Field(default=0, ge=0, description="seed of sensor noise")
+
+    @field_validator("gravity")
+    @classmethod
+    def _gravity(cls, v: tuple[float, float, float]) -> tuple[float, float, float]:
+        size = math.sqrt(sum(c * c for c in v))
+        if size > MAX_GRAVITY:
+            raise ValueError(f"gravity of {size:g} m/s^2 is beyond the engines' stable range; valid: a vector of "
+                             f"length <= {MAX_GRAVITY:g} [m/s^2], e.g. '0 0 -9.81'")
+        return v
     plugins: tuple[PluginConfig, ...] = ()
     agents: tuple[AgentModel, ...] = ()
     source: Path = Path("<memory>")
@@ -312,7 +325,9 @@ class World(_Model):
     _urdfs: UrdfFiles = PrivateAttr(default_factory=UrdfFiles)
 
     def location(self, agent: str, attribute: str | None = None) -> tuple[int, int]:
-        """``(line, column)`` of an agent's element (or of one of its attributes); (0, 0) if unknown."""
+        """``(line, column)`` of an agent's element, or of one of its attributes, or of a child element
+        (``drive``, ``lidar:<name>``, ``arm:<name>``: its ``name`` attribute); ``""``: the ``<world>`` element;
+        (0, 0) if unknown."""
         return self._locations.get((agent, attribute), self._locations.get((agent, None), (0, 0)))
 
     def record_locations(self, locations: dict[tuple[str, str | None], tuple[int, int]]) -> None:

@@ -12,6 +12,7 @@ from pydantic import BaseModel, ValidationError
 
 from .exceptions import WorldError, WorldIssue
 from .locate import SourceMap
+from .meshes import mesh_problem
 from .messages import error_field, message, unknown
 from .models import (
     Arm,
@@ -26,7 +27,7 @@ from .models import (
     Robot,
     World,
 )
-from .urdf import UrdfError, UrdfFiles, UrdfModel
+from .urdf import UrdfError, UrdfFiles, UrdfModel, resolve_mesh
 
 _AGENTS: dict[str, type[BaseModel]] = {"robot": Robot, "object": Object, "human": Human, "agent": BareAgent}
 _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
@@ -84,6 +85,11 @@ class _Reader:
         """The child elements of ``element`` whose tag is in ``allowed``; reports the others and any text."""
         out = []
         for child in element:
+            if isinstance(child, etree._Entity):  # an entity reference left unexpanded: text, which has no place
+                self.issues.append(WorldIssue(self.path, int(child.sourceline or self.line(element)), 1,
+                                              str(element.tag), None, f"unexpected entity reference {child.text}; "
+                                              f"<{element.tag}> holds no text and entities are not expanded"))
+                continue
             if not isinstance(child.tag, str):
                 continue  # comments, processing instructions
             if child.tag in allowed:
@@ -126,6 +132,12 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
         msg = _LIBXML_POSITION.sub("", str(e.msg))
         raise WorldError([WorldIssue(path, line, col, None, None, f"not well-formed XML: {msg}")]) from None
     reader = _Reader(path, text, root)
+    doctype = root.getroottree().docinfo
+    if doctype.doctype or doctype.internalDTD is not None:
+        line = text.count("\n", 0, max(text.find("<!DOCTYPE"), 0)) + 1
+        column = max(text.find("<!DOCTYPE"), 0) - (text.rfind("\n", 0, max(text.find("<!DOCTYPE"), 0)) + 1) + 1
+        raise WorldError([WorldIssue(path, line, column, None, None, "a <!DOCTYPE> declaration is not part of the "
+                                     "world format (entities and DTDs are never loaded); remove it")])
     if root.tag != "world":
         reader.issue(root, None, f"the root element is <{root.tag}>; valid: <world>")
         raise WorldError(reader.issues)
@@ -146,6 +158,7 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
                                        "plugins": tuple(p for _, p in plugins), "source": path})
     if reader.issues or world is None:
         raise WorldError(sorted(reader.issues, key=lambda i: (i.line, i.column)))
+    reader.locations[("", None)] = reader.map.element(root)  # the <world> element (World.location(""))
     world.record_locations(reader.locations)
     world.share_urdfs(reader.urdfs)
     return world
@@ -220,6 +233,11 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
         reader.locations[(agent.name, None)] = reader.map.element(element)
         for key in element.attrib:
             reader.locations[(agent.name, str(key))] = reader.map.attribute(element, str(key))
+        for child, _ in children["drive"]:
+            reader.locations[(agent.name, "drive")] = reader.map.element(child)
+        for field, tag in (("lidars", "lidar"), ("arms", "arm")):
+            for child, value in children[field]:
+                reader.locations[(agent.name, f"{tag}:{value.name}")] = reader.map.attribute(child, "name")
     return agent
 
 
@@ -234,19 +252,60 @@ def _check_files(reader: _Reader, element: etree._Element, base: Path,
             reader.issue(element, attr, "empty path; valid: a file path, relative to the world file's "
                                         "directory")
             continue
+        too_long = _path_too_long(raw.strip())
+        if too_long:
+            reader.issue(element, attr, too_long)
+            continue
         file = Path(os.path.normpath(base / raw.strip()))
-        if not file.is_file():
+        problem = mesh_problem(file) if attr == "mesh" and file.is_file() else None
+        if problem is not None:
+            reader.issue(element, attr, f"mesh file {file}: {problem}; valid: an .stl or .obj mesh")
+        elif not file.is_file():
             relative = "" if Path(raw.strip()).is_absolute() else \
                 " (relative paths start at the world file's directory)"
             reader.issue(element, attr, f"file not found: {file}{relative}")
         elif attr == "urdf":
             try:
-                urdf = reader.urdfs.get(file).model
+                document = reader.urdfs.get(file)
+                urdf = document.model
             except UrdfError as e:
                 reader.issue(element, attr, f"invalid URDF: {e}")
                 continue
+            broken = _urdf_mesh_problem(document.root, file)
+            if broken is not None:
+                reader.issue(element, attr, f"invalid URDF: {broken}")
+                continue
             if element.tag == "robot":
                 _check_robot(reader, urdf, raw.strip(), children)
+
+
+def _urdf_mesh_problem(root: etree._Element, file: Path) -> str | None:
+    """``file:line: mesh ...: problem`` for the first mesh of a URDF that exists and is broken (missing meshes are
+    the backend's to report, with the link)."""
+    seen: set[Path] = set()
+    for mesh in root.iter("mesh"):
+        path = resolve_mesh(str(mesh.get("filename", "")), file.parent)
+        if path is None or path in seen:
+            continue
+        seen.add(path)
+        problem = mesh_problem(path)
+        if problem is not None:
+            return f"{file}:{mesh.sourceline}: mesh {path}: {problem}"
+    return None
+
+
+MAX_PATH = 1024
+"""Longest ``urdf``/``mesh`` path in a world file [characters]; each '/'-separated part at most 255 (NAME_MAX)."""
+
+
+def _path_too_long(raw: str) -> str | None:
+    """Why the path ``raw`` is too long for the file system, or None."""
+    if len(raw) > MAX_PATH:
+        return f"path of {len(raw)} characters; valid: at most {MAX_PATH}"
+    part = max(raw.replace("\\", "/").split("/"), key=len)
+    if len(part.encode("utf-8")) > 255:
+        return f"path part of {len(part.encode('utf-8'))} bytes ({part[:20]!r}...); valid: at most 255 per part"
+    return None
 
 
 def _check_robot(reader: _Reader, urdf: UrdfModel, file: str, children: dict[str, list[Any]]) -> None:

@@ -56,7 +56,9 @@ def validate_plugin(world: World, plugin: PluginConfig, model: type[M]) -> M:
         for err in e.errors():
             field = error_field(err)
             attribute = field if field in plugin.config else None
-            issues.append(plugin_issue(world, plugin, attribute, _message(model, err, data.get(field or ""))))
+            issue = plugin_issue(world, plugin, attribute, _message(model, err, data.get(field or "")))
+            if issue not in issues:  # one per attribute and message ('inf inf' is two errors of one attribute)
+                issues.append(issue)
         raise WorldError(_sorted(issues)) from None
     if issues:
         raise WorldError(_sorted(issues))

@@ -9,6 +9,7 @@ instead of reading the file again.
 from __future__ import annotations
 
 import copy
+import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -176,9 +177,17 @@ def _names(path: Path, root: etree._Element) -> UrdfModel:
     """The names model of the parsed URDF ``root`` read from ``path``; ``UrdfError`` if it is inconsistent."""
     if root.tag != "robot":
         raise UrdfError(path, root.sourceline or 0, f"root element is <{root.tag}>, expected <robot>")
-    links = tuple(str(e.get("name")) for e in root.findall("link"))
+    link_elements = root.findall("link")
+    links = tuple(str(e.get("name")) for e in link_elements)
     if not links:
         raise UrdfError(path, root.sourceline or 0, "no <link> in the robot")
+    if len(links) > MAX_LINKS:
+        raise UrdfError(path, link_elements[MAX_LINKS].sourceline or 0,
+                        f"{len(links)} links; the limit is {MAX_LINKS} links per URDF (sigcore.world.urdf.MAX_LINKS)")
+    _unique_names(path, link_elements, "link")
+    _unique_names(path, root.findall("joint"), "joint")
+    for element in link_elements:
+        _check_link(path, element)
     joints: list[UrdfJoint] = []
     for e in root.findall("joint"):
         parent, child = e.find("parent"), e.find("child")
@@ -214,6 +223,50 @@ def _names(path: Path, root: etree._Element) -> UrdfModel:
         raise UrdfError(path, root.sourceline or 0, f"expected one root link, found {roots}")
     meshes = tuple(str(m.get("filename")) for m in root.iter("mesh"))
     return UrdfModel(str(root.get("name", path.stem)), links, tuple(joints), roots[0], meshes)
+
+
+MAX_LINKS = 500
+"""Most links in one URDF (so the longest kinematic chain); a larger model is refused when the world is read."""
+
+_NUMBERS = {"mass": ("value",), "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"), "origin": ("xyz", "rpy")}
+
+
+def _unique_names(path: Path, elements: list[etree._Element], what: str) -> None:
+    """``UrdfError`` at the second ``<what>`` of any name, pointing at the first."""
+    first: dict[str, int] = {}
+    for e in elements:
+        name = str(e.get("name"))
+        if name in first:
+            raise UrdfError(path, e.sourceline or 0, f"duplicate {what} name '{name}' (first on line {first[name]}); "
+                                                     f"every {what} needs its own name")
+        first[name] = e.sourceline or 0
+
+
+def _check_link(path: Path, link: etree._Element) -> None:
+    """``UrdfError`` for a link whose ``<inertial>`` or ``<origin>`` numbers are not finite, or whose mass or
+    principal moments of inertia are negative; geometry scales must be finite and > 0."""
+    name = link.get("name")
+    for e in link.iter("mass", "inertia", "origin", "mesh", "box", "cylinder", "sphere"):
+        attributes = _NUMBERS.get(str(e.tag), ("scale", "size", "radius", "length"))
+        for attribute in attributes:
+            text = e.get(attribute)
+            if text is None:
+                continue
+            try:
+                values = [float(v) for v in text.split()]
+            except ValueError:
+                raise UrdfError(path, e.sourceline or 0, f"link '{name}': <{e.tag} {attribute}={text[:40]!r}> is "
+                                                         "not numbers separated by spaces") from None
+            if not all(math.isfinite(v) for v in values):
+                raise UrdfError(path, e.sourceline or 0, f"link '{name}': <{e.tag} {attribute}={text[:40]!r}> "
+                                                         "must be finite numbers (no nan or inf)")
+            negative = e.tag == "mass" or (e.tag == "inertia" and attribute in ("ixx", "iyy", "izz"))
+            if negative and any(v < 0 for v in values):
+                raise UrdfError(path, e.sourceline or 0, f"link '{name}': <{e.tag} {attribute}={text!r}> is negative; "
+                                                         "valid: >= 0")
+            if e.tag in ("mesh", "box", "cylinder", "sphere") and any(v <= 0 for v in values):
+                raise UrdfError(path, e.sourceline or 0, f"link '{name}': <{e.tag} {attribute}={text[:40]!r}> must "
+                                                         "be > 0")
 
 
 MESH_SEARCH_DEPTH = 4

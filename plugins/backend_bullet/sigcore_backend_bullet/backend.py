@@ -34,7 +34,7 @@ import numpy as np
 import numpy.typing as npt
 import pybullet as pb
 
-from sigcore.backend import GROUND, MAIN, Array, Backend, BackendError
+from sigcore.backend import GROUND, MAIN, Array, Backend, BackendError, BackendRefusal
 from sigcore.geometry import cross
 from sigcore.world.models import Object, Robot, World
 
@@ -263,7 +263,7 @@ class BulletBackend(Backend):
         self._client()
         entity = self._entities.get(name)
         if entity is None:
-            raise BackendError(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
+            raise BackendRefusal(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
         return entity
 
     # ------------------------------------------------------------------ state
@@ -367,7 +367,7 @@ class BulletBackend(Backend):
         masses = self._mass[entity]
         total = sum(masses)
         if total <= 0.0:
-            raise BackendError(f"{e.kind} '{e.name}' has no mass to scale (its URDF has no <inertial>)")
+            raise BackendRefusal(f"{e.kind} '{e.name}' has no mass to scale (its URDF has no <inertial>)")
         factor = mass / total
         for i, link in enumerate(e.links):
             masses[i] *= factor
@@ -389,13 +389,13 @@ class BulletBackend(Backend):
         """Dynamics off holds the base and every joint where they are now.
 
         Raises:
-            BackendError: enabling dynamics of a static object (PyBullet holds it with mass 0).
+            BackendRefusal: enabling dynamics of a static object (PyBullet holds it with mass 0).
         """
         self._wake()
         e = self._entity(entity)
         if e.static:
             if enabled:
-                raise BackendError(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "
+                raise BackendRefusal(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "
                                    "cannot become dynamic; move it with set_pose")
             return
         if enabled:
@@ -455,13 +455,13 @@ class BulletBackend(Backend):
         """Position servo towards ``angle``.
 
         Raises:
-            BackendError: the joint is a drive wheel (always a velocity servo).
+            BackendRefusal: the joint is a drive wheel (always a velocity servo).
         """
         e = self._entity(entity)
         j = e.joint(joint)
         if j.wheel:
             arms = [n for n, x in e.joints.items() if not x.wheel]
-            raise BackendError(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
+            raise BackendRefusal(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
                                f"use set_joint_velocity; joints with position control: "
                                f"{', '.join(arms) or 'none'}")
         self._position_servo(e, j, angle)
@@ -494,7 +494,7 @@ class BulletBackend(Backend):
         """A ``JOINT_FIXED`` constraint between ``part`` and ``obj`` at their current relative pose.
 
         Raises:
-            BackendError: ``part`` is not a gripper of ``entity`` or ``obj`` is not a graspable dynamic object.
+            BackendRefusal: ``part`` is not a gripper of ``entity`` or ``obj`` is not a graspable dynamic object.
         """
         self._wake()
         robot, target = self._entity(entity), self._entity(obj)
@@ -503,7 +503,7 @@ class BulletBackend(Backend):
             return
         if key not in self._graspable:
             pairs = sorted(f"{p} + {o}" for (r, p, o) in self._graspable if r == entity)
-            raise BackendError(f"'{entity}' cannot attach '{obj}' to '{part}': only <gripper> parts hold "
+            raise BackendRefusal(f"'{entity}' cannot attach '{obj}' to '{part}': only <gripper> parts hold "
                                f"graspable, non-static objects; possible: {', '.join(pairs) or 'none'}")
         self._grasps[key] = grasp.attach(self.client, robot, robot.link(part), target)
         self._filters_changed = True
@@ -527,7 +527,7 @@ class BulletBackend(Backend):
         """``(entity, part)`` of a part id; ``("ground", "main")`` for 0."""
         table = self._part_table
         if not 0 <= part_id < len(table):
-            raise BackendError(f"no part id {part_id}; valid ids: 0..{len(table) - 1}")
+            raise BackendRefusal(f"no part id {part_id}; valid ids: 0..{len(table) - 1}")
         return table[part_id]
 
     def ray_cast(self, origin: Array, directions: npt.NDArray[np.float64], max_range: float,

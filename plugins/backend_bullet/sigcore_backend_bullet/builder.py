@@ -19,6 +19,7 @@ import os
 import pybullet as pb
 
 from sigcore.backend import MAIN, BackendError
+from sigcore.world.meshes import mesh_problem
 from sigcore.world.models import Human, Object, Robot, World
 from sigcore.world.urdf import UrdfDocument, UrdfError
 
@@ -184,6 +185,9 @@ def _add_shape_object(client: int, world: World, obj: Object) -> EntityIndex:
         path = world.resolve(obj.mesh)
         if not path.is_file():
             raise BackendError(f"object '{obj.name}': mesh file {path} not found")
+        problem = mesh_problem(path)  # PyBullet crashes the process on some broken meshes: never hand it one
+        if problem is not None:
+            raise BackendError(f"object '{obj.name}': mesh {path}: {problem}")
         try:
             shape = pb.createCollisionShape(pb.GEOM_MESH, fileName=str(path.resolve()), meshScale=[obj.scale] * 3,
                                             physicsClientId=client)

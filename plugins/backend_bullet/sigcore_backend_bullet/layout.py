@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from sigcore.backend import MAIN, BackendError
+from sigcore.backend import MAIN, BackendRefusal
 
 BASE = -1
 """PyBullet's link index of a body's base (a robot's root link)."""
@@ -107,21 +107,21 @@ class EntityIndex:
         """Link index of ``part`` (``None`` or ``"main"``: the base).
 
         Raises:
-            BackendError: no such part; the message lists the valid ones.
+            BackendRefusal: no such part; the message lists the valid ones.
         """
         if part is None:
             return BASE
         link = self.part_link.get(part)
         if link is None:
             alias = f" (or '{MAIN}')" if self.kind == "robot" else ""
-            raise BackendError(f"{self.kind} '{self.name}' has no part '{part}'; parts: "
+            raise BackendRefusal(f"{self.kind} '{self.name}' has no part '{part}'; parts: "
                                f"{', '.join(self.parts)}{alias}")
         return link
 
     def joint(self, name: str) -> JointIndex:
-        """The movable joint ``name``; :class:`BackendError` listing the valid joints otherwise."""
+        """The movable joint ``name``; :class:`BackendRefusal` listing the valid joints otherwise."""
         joint = self.joints.get(name)
         if joint is None:
-            raise BackendError(f"{self.kind} '{self.name}' has no movable joint '{name}'; joints: "
+            raise BackendRefusal(f"{self.kind} '{self.name}' has no movable joint '{name}'; joints: "
                                f"{', '.join(self.joints) or 'none'}")
         return joint

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from lxml import etree
 
 from sigcore.backend import BackendError
+from sigcore.world.meshes import mesh_problem
 from sigcore.world.urdf import UrdfDocument, link_friction, resolve_mesh
 
 _ZERO_INERTIAL = ('<inertial><origin xyz="0 0 0"/><mass value="0"/>'
@@ -68,6 +69,10 @@ def prepare_urdf(urdf: UrdfDocument, what: str, floating: bool) -> PreparedUrdf:
             link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
             raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
                                f"(relative paths are relative to the URDF's directory {path.parent})")
+        problem = mesh_problem(resolved)  # PyBullet crashes the process on some broken meshes
+        if problem is not None:
+            link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
+            raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path}: {problem}")
         mesh.set("filename", str(resolved))
     links = [str(e.get("name")) for e in root.findall("link")]
     if not links:

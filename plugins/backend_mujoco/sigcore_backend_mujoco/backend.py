@@ -24,13 +24,14 @@ Runtime techniques (each verified against MuJoCo 4.0 in ``tests/backend_mujoco``
 from __future__ import annotations
 
 import copy
+import logging
 from typing import ClassVar
 
 import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from sigcore.backend import Array, Backend, BackendError
+from sigcore.backend import Array, Backend, BackendError, BackendRefusal
 from sigcore.geometry import normalized as unit
 from sigcore.geometry import quat_to_matrix
 from sigcore.world.models import World
@@ -45,6 +46,11 @@ from .rays import RayCaster
 from .servo import ArmServo
 
 _NO_INTS = np.zeros(0, dtype=np.int64)
+log = logging.getLogger("sigcore.backend.mujoco")
+
+STABILITY_CHECK_MASK = 255
+"""MuJoCo's bad-acceleration warning counter is read when ``step & STABILITY_CHECK_MASK == 0`` (every 256 steps,
+0.5 s at the default timestep: reading it every step would cost 1 % of the step)."""
 
 
 class MujocoBackend(Backend):
@@ -98,6 +104,7 @@ class MujocoBackend(Backend):
         for servo in self._servos:
             servo.restart(m, d)
         self._tick = 0
+        self._unstable = 0
         self._synced = -1
         self._contacts_tick = -1
         self._contacts: frozenset[tuple[int, int]] = frozenset()
@@ -111,8 +118,32 @@ class MujocoBackend(Backend):
         """Advance by one timestep (``mj_step``); then restore held entities and clear applied forces."""
         mujoco.mj_step(self.model, self.data)
         self._tick += 1
+        if not self._tick & STABILITY_CHECK_MASK:
+            self._check_stability()
         if self._post:
             self._after_step()
+
+    def _check_stability(self) -> None:
+        """Report (once per run of the model, then only counted) that MuJoCo found a NaN, infinite or huge
+        acceleration, which makes it reset its whole state to the initial one: the entity whose dof it was, and
+        what usually causes it."""
+        warning = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        if warning.number <= self._unstable:
+            return
+        if self._unstable == 0:
+            dof = int(warning.lastinfo)
+            owner = next((f"{e.kind} '{e.name}'" for e in self._entities.values() if dof in e.dofs), f"dof {dof}")
+            log.warning("MuJoCo became unstable within the last %d steps (a NaN, infinite or huge acceleration of "
+                        "%s) and reset every body to its initial state; usual causes: huge forces or torques, "
+                        "tiny masses, extreme gravity or timestep (logged once; later ones are counted)",
+                        STABILITY_CHECK_MASK + 1, owner)
+        self._unstable = warning.number
+
+    @property
+    def instabilities(self) -> int:
+        """How many times MuJoCo reset its state because of a NaN, infinite or huge acceleration since the last
+        build or reset (checked every ``STABILITY_CHECK_MASK + 1`` steps)."""
+        return int(self._unstable)
 
     def _after_step(self) -> None:
         d = self.data
@@ -146,7 +177,7 @@ class MujocoBackend(Backend):
             raise BackendError("the MuJoCo backend has no world yet; call build(world) first")
         entity = self._entities.get(name)
         if entity is None:
-            raise BackendError(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
+            raise BackendRefusal(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
         return entity
 
     def _sync(self) -> None:
@@ -226,7 +257,10 @@ class MujocoBackend(Backend):
 
     def set_mass(self, entity: str, mass: float) -> None:
         """Scale every body's mass and inertia so that they total ``mass`` [kg]; then ``mj_setConst``."""
-        self._scale_mass(self._entity(entity), mass)
+        e = self._entity(entity)
+        if float(self.model.body_mass[e.bodies].sum()) <= 0.0:
+            raise BackendRefusal(f"{e.kind} '{e.name}' has no mass to scale (its URDF has no <inertial>)")
+        self._scale_mass(e, mass)
 
     def _scale_mass(self, e: EntityIndex, mass: float) -> None:
         m = self.model
@@ -251,12 +285,12 @@ class MujocoBackend(Backend):
         """Dynamics off holds every joint of the entity (free joint included) where it is now.
 
         Raises:
-            BackendError: enabling dynamics of a static object (it has no joints).
+            BackendRefusal: enabling dynamics of a static object (it has no joints).
         """
         e = self._entity(entity)
         if e.qpos.size == 0:
             if enabled:
-                raise BackendError(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "
+                raise BackendRefusal(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "
                                    "cannot become dynamic; move it with set_pose")
             return
         if enabled:
@@ -314,13 +348,13 @@ class MujocoBackend(Backend):
         """Position servo towards ``angle``.
 
         Raises:
-            BackendError: the joint is a drive wheel (always a velocity servo).
+            BackendRefusal: the joint is a drive wheel (always a velocity servo).
         """
         e = self._entity(entity)
         j = e.joint(joint)
         if not isinstance(j.servo, ArmServo):
             arms = [n for n, x in e.joints.items() if isinstance(x.servo, ArmServo)]
-            raise BackendError(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
+            raise BackendRefusal(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
                                f"use set_joint_velocity; joints with position control: "
                                f"{', '.join(arms) or 'none'}")
         j.servo.hold(self.model, self.data, angle)
@@ -384,7 +418,7 @@ class MujocoBackend(Backend):
         """``(entity, part)`` of a part id; ``("ground", "main")`` for 0."""
         table = self._layout.part_table
         if not 0 <= part_id < len(table):
-            raise BackendError(f"no part id {part_id}; valid ids: 0..{len(table) - 1}")
+            raise BackendRefusal(f"no part id {part_id}; valid ids: 0..{len(table) - 1}")
         return table[part_id]
 
     def ray_cast(self, origin: Array, directions: npt.NDArray[np.float64], max_range: float,

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import mujoco
 
-from sigcore.backend import BackendError
+from sigcore.backend import BackendRefusal
 from sigcore.geometry import quat_conj, quat_mul
 
 from .layout import EntityIndex, Layout
@@ -30,13 +30,13 @@ def weld_id(layout: Layout, robot: EntityIndex, part: str, obj: EntityIndex) -> 
     """The weld between ``robot``'s ``part`` and ``obj``.
 
     Raises:
-        BackendError: there is none (not a gripper, or the object is not graspable or static); the
+        BackendRefusal: there is none (not a gripper, or the object is not graspable or static); the
             message lists the pairs that exist.
     """
     weld = layout.welds.get((robot.name, part, obj.name))
     if weld is None:
         pairs = sorted(f"{p} + {o}" for (r, p, o) in layout.welds if r == robot.name)
-        raise BackendError(f"'{robot.name}' cannot attach '{obj.name}' to '{part}': only <gripper> parts "
+        raise BackendRefusal(f"'{robot.name}' cannot attach '{obj.name}' to '{part}': only <gripper> parts "
                            f"hold graspable, non-static objects; possible: {', '.join(pairs) or 'none'}")
     return weld
 

@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from sigcore.backend import GROUND, MAIN, BackendError
+from sigcore.backend import GROUND, MAIN, BackendRefusal
 
 from .plan import EntityPlan, WeldPlan, prefix
 from .servo import POSITION, ArmServo, Drive, WheelMotor, motor_name
@@ -84,22 +84,22 @@ class EntityIndex:
         """Body id of ``part`` (``None`` or ``"main"``: the main part).
 
         Raises:
-            BackendError: no such part; the message lists the valid ones.
+            BackendRefusal: no such part; the message lists the valid ones.
         """
         if part is None:
             return self.root
         body = self.part_body.get(part)
         if body is None:
             alias = f" (or '{MAIN}')" if self.kind == "robot" else ""
-            raise BackendError(f"{self.kind} '{self.name}' has no part '{part}'; parts: "
+            raise BackendRefusal(f"{self.kind} '{self.name}' has no part '{part}'; parts: "
                                f"{', '.join(self.parts)}{alias}")
         return body
 
     def joint(self, name: str) -> JointIndex:
-        """The actuated joint ``name``; :class:`BackendError` listing the valid joints otherwise."""
+        """The actuated joint ``name``; :class:`BackendRefusal` listing the valid joints otherwise."""
         joint = self.joints.get(name)
         if joint is None:
-            raise BackendError(f"{self.kind} '{self.name}' has no movable joint '{name}'; joints: "
+            raise BackendRefusal(f"{self.kind} '{self.name}' has no movable joint '{name}'; joints: "
                                f"{', '.join(self.joints) or 'none'}")
         return joint
 

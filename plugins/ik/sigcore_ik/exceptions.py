@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from sigcore.agent.exceptions import ApiError
+from sigcore.text import quote
 
 
 class IkError(ApiError):
@@ -26,7 +27,7 @@ class UnknownChainError(IkError):
 
     def __init__(self, robot: str, chain: str, valid: Iterable[str]) -> None:
         self.robot, self.chain, self.valid = robot, chain, tuple(valid)
-        super().__init__(f"robot '{robot}' has no arm '{chain}'; valid: {', '.join(self.valid) or 'none'}")
+        super().__init__(f"robot '{robot}' has no arm {quote(chain)}; valid: {', '.join(self.valid) or 'none'}")
 
 
 class UnknownFrameError(IkError):
@@ -39,7 +40,7 @@ class UnknownFrameError(IkError):
 
     def __init__(self, frame: str, valid: Iterable[str]) -> None:
         self.frame, self.valid = frame, tuple(valid)
-        super().__init__(f"unknown frame '{frame}'; valid: {', '.join(self.valid)}")
+        super().__init__(f"unknown frame {quote(frame)}; valid: {', '.join(self.valid)}")
 
 
 class InvalidTargetError(IkError):

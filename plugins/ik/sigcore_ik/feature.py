@@ -197,8 +197,14 @@ class IkFeature(Feature):
         return {"solves": self.solves, "arms": {n: [c.name for c in r.chains] for n, r in self.robots.items()}}
 
 
+MAX_MAGNITUDE = 1e4
+"""Largest magnitude of a target coordinate, quaternion component, tolerance or timeout a request may carry (the
+core's position limit, ``sigcore.agent.handle.LIMITS``): beyond it the solver's arithmetic overflows."""
+
+
 def finite(value: float, field: str) -> float:
-    """``value`` if finite, else :class:`InvalidTargetError` naming ``field``."""
-    if not math.isfinite(value):
-        raise InvalidTargetError(f"{field} is {value}; valid: a finite number")
+    """``value`` if finite and at most ``MAX_MAGNITUDE`` in magnitude, else :class:`InvalidTargetError` naming
+    ``field``."""
+    if not math.isfinite(value) or abs(value) > MAX_MAGNITUDE:
+        raise InvalidTargetError(f"{field} is {value}; valid: a finite number within ±{MAX_MAGNITUDE:g}")
     return value

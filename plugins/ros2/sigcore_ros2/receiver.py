@@ -12,12 +12,16 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 from typing import Any
 
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
+
+from sigcore.api.call import log_key
+from sigcore.text import clip
 
 log = logging.getLogger("sigcore.ros2")
 
@@ -91,68 +95,98 @@ class Receiver:
             job = queue.popleft()
             try:
                 job()
-            except Exception:  # a bug in one callback must not stop the simulation
-                log.exception("ROS 2 callback failed")
+            except Exception as e:  # a bug in one callback must not stop the simulation
+                endpoint = getattr(job, "endpoint", "a queued job")
+                kind = type(e).__name__
+                log.error("ROS 2 callback of %s failed (%s: %s)", endpoint, kind, clip(str(e), 200),
+                          exc_info=True, extra=log_key(endpoint, kind))
         self._drained.set()
 
     def _run(self, sub_list: list[tuple[Subscription, Callable[[Any], None]]],
              srv_list: list[tuple[Any, Callable[[Any, Any], None]]]) -> None:
-        subs = {s.handle.pointer: (s, cb) for s, cb in sub_list}
+        subs = {s.handle.pointer: (s, cb, s.topic_name) for s, cb in sub_list}
         srvs = {s.handle.pointer: (s, cb) for s, cb in srv_list}
         with self._context.handle:
             wait_set = _rclpy.WaitSet(len(subs), 1, 0, 0, len(srvs), 0, self._context.handle)
         sub_handles = [s.handle for s, _ in sub_list]
         srv_handles = [s.handle for s, _ in srv_list]
-        queue, arrived, drained = self._queue, self._arrived, self._drained
         while not self._stop and self._context.ok():
-            wait_set.clear_entities()  # about 0.3 ms with the GIL for 700 endpoints: done while nothing waits
-            add = wait_set.add_subscription
-            for handle in sub_handles:
-                add(handle)
-            add = wait_set.add_service
-            for handle in srv_handles:
-                add(handle)
-            wait_set.add_guard_condition(self._wake)
             try:
-                wait_set.wait(-1)
-            except Exception:  # the context was shut down under us
-                break
-            if self._stop:
-                self._wake.trigger_guard_condition()  # the other thread too
-                break
-            for ptr in wait_set.get_ready_entities("subscription"):
-                sub, cb = subs[ptr]
-                while True:
-                    try:
-                        with sub.handle:
-                            taken = sub.handle.take_message(sub.msg_type, False)
-                    except Exception:
-                        taken = None
-                    if taken is None:
-                        break
-                    queue.append(_bind1(cb, taken[0]))
-            for ptr in wait_set.get_ready_entities("service"):
-                srv, scb = srvs[ptr]
-                while True:
-                    try:
-                        with srv.handle:
-                            request, header = srv.handle.service_take_request(srv.srv_type.Request)
-                    except Exception:
-                        header = None
-                    if header is None:
-                        break
-                    queue.append(_bind2(scb, request, header))
-            if queue:
-                drained.clear()
-                arrived.set()
-                # let the simulation thread take the GIL and answer at its next step boundary before this
-                # thread rebuilds its wait set (bounded: the simulation may be busy in a long step)
-                drained.wait(0.002)
+                if not self._wait_once(wait_set, sub_handles, srv_handles, subs, srvs):
+                    break
+            except Exception as e:  # a bug here must not end the thread: every later request would hang
+                kind = type(e).__name__
+                name = threading.current_thread().name
+                log.error("the ROS 2 receiver thread %s failed (%s: %s); still serving", name, kind,
+                          clip(str(e), 200), exc_info=True, extra=log_key(name, kind))
+                time.sleep(0.01)  # a failure that repeats must not spin a core
+
+    def _wait_once(self, wait_set: Any, sub_handles: list[Any], srv_handles: list[Any],
+                   subs: dict[int, tuple[Subscription, Callable[[Any], None], str]],
+                   srvs: dict[int, tuple[Any, Callable[[Any, Any], None]]]) -> bool:
+        """Wait for traffic and queue it; False when the thread must end."""
+        queue, arrived, drained = self._queue, self._arrived, self._drained
+        wait_set.clear_entities()  # about 0.3 ms with the GIL for 700 endpoints: done while nothing waits
+        add = wait_set.add_subscription
+        for handle in sub_handles:
+            add(handle)
+        add = wait_set.add_service
+        for handle in srv_handles:
+            add(handle)
+        wait_set.add_guard_condition(self._wake)
+        try:
+            wait_set.wait(-1)
+        except Exception:  # the context was shut down under us
+            return False
+        if self._stop:
+            self._wake.trigger_guard_condition()  # the other thread too
+            return False
+        for ptr in wait_set.get_ready_entities("subscription"):
+            sub, cb, topic = subs[ptr]
+            while True:
+                try:
+                    with sub.handle:
+                        taken = sub.handle.take_message(sub.msg_type, False)
+                except Exception as e:  # e.g. a message that cannot be deserialized: dropped
+                    _failed(topic, "taking a message", e)
+                    taken = None
+                if taken is None:
+                    break
+                queue.append(_Job(cb, (taken[0],), topic))
+        for ptr in wait_set.get_ready_entities("service"):
+            srv, scb = srvs[ptr]
+            while True:
+                try:
+                    with srv.handle:
+                        request, header = srv.handle.service_take_request(srv.srv_type.Request)
+                except Exception as e:  # a request that cannot be deserialized: dropped
+                    _failed(srv.srv_name, "taking a request", e)
+                    header = None
+                if header is None:
+                    break
+                queue.append(_Job(scb, (request, header), srv.srv_name))
+        if queue:
+            drained.clear()
+            arrived.set()
+            # let the simulation thread take the GIL and answer at its next step boundary before this
+            # thread rebuilds its wait set (bounded: the simulation may be busy in a long step)
+            drained.wait(0.002)
+        return True
 
 
-def _bind1(cb: Callable[[Any], None], a: Any) -> Job:
-    return lambda: cb(a)
+class _Job:
+    """``callback(*args)`` for the simulation thread, with the endpoint it came from (for the log)."""
+
+    __slots__ = ("args", "callback", "endpoint")
+
+    def __init__(self, callback: Callable[..., None], args: tuple[Any, ...], endpoint: str) -> None:
+        self.callback, self.args, self.endpoint = callback, args, endpoint
+
+    def __call__(self) -> None:
+        self.callback(*self.args)
 
 
-def _bind2(cb: Callable[[Any, Any], None], a: Any, b: Any) -> Job:
-    return lambda: cb(a, b)
+def _failed(endpoint: str, what: str, e: Exception) -> None:
+    kind = type(e).__name__
+    log.error("%s: %s failed (%s: %s); dropped", endpoint, what, kind, clip(str(e), 200),
+              extra=log_key(endpoint, kind))

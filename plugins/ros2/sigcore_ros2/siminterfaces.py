@@ -30,6 +30,8 @@ from simulation_interfaces.srv import (
 )
 
 from sigcore.agent.exceptions import ApiError
+from sigcore.api.call import log_key
+from sigcore.text import clip, quote
 
 from .convert import finite, stamp
 
@@ -56,6 +58,10 @@ SERVICES = {
     "get_simulation_state": GetSimulationState, "set_simulation_state": SetSimulationState,
     "reset_simulation": ResetSimulation, "step_simulation": StepSimulation,
 }
+
+
+MAX_STEPS = 10_000_000
+"""Most steps one step_simulation request or simulate_steps goal may ask for [steps]."""
 
 
 def _result(code: int, message: str = "") -> Result:
@@ -88,7 +94,6 @@ class SimInterfaces:
         self.on_reset = on_reset
         self.dt_ns = round(sim.dt * 1e9)
         self.names: dict[str, str] = {}
-        self._warned: set[str] = set()
         self._models = {a.name: a for a in sim.world.agents}
         for name, srv_type in SERVICES.items():
             full = f"{prefix}/{name}"
@@ -102,16 +107,17 @@ class SimInterfaces:
             try:
                 answered = method(request, response, lambda r: srv.send_response(r, header))
             except Exception as e:  # a bug must not stop the simulation
-                log.exception("%s failed", srv.srv_name)
-                response.result = _result(Result.RESULT_OPERATION_FAILED, f"internal error: {e}")
+                kind = f"internal error {type(e).__name__}"
+                log.exception("%s failed", srv.srv_name, extra=log_key(srv.srv_name, kind))
+                response = srv.srv_type.Response()
+                response.result = _result(Result.RESULT_OPERATION_FAILED,
+                                          f"internal error: {type(e).__name__}: {clip(str(e), 200)}")
                 answered = False
             if answered is False:
                 result = getattr(response, "result", None)
                 if result is not None and result.result not in (Result.RESULT_OK,):
-                    key = f"{srv.srv_name}:{result.result}"
-                    if key not in self._warned:
-                        self._warned.add(key)
-                        log.warning("%s refused (logged once per kind): %s", srv.srv_name, result.error_message)
+                    log.warning("%s refused (logged once per kind): %s", srv.srv_name, clip(result.error_message),
+                                extra=log_key(srv.srv_name, f"result {result.result}"))
                 srv.send_response(response, header)
 
         return handle
@@ -163,7 +169,7 @@ class SimInterfaces:
             try:
                 pattern = re.compile(filters.filter)
             except re.error as e:
-                res.result = _result(Result.RESULT_OPERATION_FAILED, f"filter '{filters.filter}': {e}")
+                res.result = _result(Result.RESULT_OPERATION_FAILED, f"filter {quote(filters.filter)}: {e}")
                 return None
             names = [n for n in names if pattern.search(n)]
         tags = set(filters.tags.tags)
@@ -199,7 +205,7 @@ class SimInterfaces:
         if name in self.sim.entity_names:
             return False
         res.result = _result(Result.RESULT_NOT_FOUND,
-                             f"no entity '{name}'; entities: {', '.join(self.sim.entity_names)}")
+                             f"no entity {quote(name)}; entities: {', '.join(self.sim.entity_names)}")
         return True
 
     def _get_entity_state(self, req: Any, res: Any, reply: Any) -> bool:
@@ -221,7 +227,7 @@ class SimInterfaces:
         st = req.state
         if st.header.frame_id not in ("", "world"):
             res.result = _result(Result.RESULT_OPERATION_FAILED,
-                                 f"frame '{st.header.frame_id}' is not supported; use '' or 'world'")
+                                 f"frame {quote(st.header.frame_id)} is not supported; use '' or 'world'")
             return False
         p, o = st.pose.position, st.pose.orientation
         q = (o.w, o.x, o.y, o.z)
@@ -317,8 +323,8 @@ class SimInterfaces:
         if steps <= 0:
             res.result = _result(Result.RESULT_OK)
             return False
-        if steps > 10_000_000:
-            res.result = _result(Result.RESULT_OPERATION_FAILED, f"{steps} steps is too many (max 10000000)")
+        if steps > MAX_STEPS:
+            res.result = _result(Result.RESULT_OPERATION_FAILED, f"{steps} steps is too many (max {MAX_STEPS})")
             return False
         self.add_steps(steps, lambda result: reply(StepSimulation.Response(result=result)))
         return True
@@ -374,6 +380,11 @@ class SimulateStepsAction:
             if i.state != SimulationState.STATE_PAUSED and not i.stopped:
                 outcome["result"] = _result(Result.RESULT_OPERATION_FAILED,
                                             "simulate_steps needs the simulation paused")
+                finished.set()
+                return
+            if steps > MAX_STEPS:
+                outcome["result"] = _result(Result.RESULT_OPERATION_FAILED,
+                                            f"{steps} steps is too many (max {MAX_STEPS})")
                 finished.set()
                 return
             outcome["start"] = sim.step_count

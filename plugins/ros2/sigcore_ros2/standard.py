@@ -21,6 +21,7 @@ from tf2_msgs.msg import TFMessage
 from sigcore.agent.exceptions import ApiError
 from sigcore.agent.robot import RobotObj
 from sigcore.sim.lidar import Scan
+from sigcore.transport import Endpoint
 
 from .cdr import CdrTemplate
 from .publications import fill_message
@@ -98,17 +99,25 @@ class StandardEndpoints:
         sim.scan_observers.append(self._scan)
 
     @staticmethod
-    def plan(sim: Simulation) -> dict[str, str]:
-        """Every topic the constructor creates (name -> type), without creating any."""
-        out = {"/clock": "rosgraph_msgs/msg/Clock", "/tf": "tf2_msgs/msg/TFMessage"}
+    def plan(sim: Simulation) -> list[Endpoint]:
+        """Every topic the constructor creates, with the world element that brought its name in, without creating
+        any."""
+        out = [Endpoint("/clock", "rosgraph_msgs/msg/Clock", "topic", "the transport's clock"),
+               Endpoint("/tf", "tf2_msgs/msg/TFMessage", "topic", "the transport's odometry transforms", shared=True)]
         for name, handle in sim.agents.items():
             if isinstance(handle, RobotObj):
-                out[f"/{name}/joint_states"] = "sensor_msgs/msg/JointState"
+                out.append(Endpoint(f"/{name}/joint_states", "sensor_msgs/msg/JointState", "topic",
+                                    f"the joint states of robot '{name}'", name, "name"))
                 if sim.robot_model(name).drive is not None:
-                    out[f"/{name}/odom"] = "nav_msgs/msg/Odometry"
-                    out[f"/{name}/cmd_vel"] = "geometry_msgs/msg/Twist"
+                    what = f"of the <drive> of robot '{name}'"
+                    out.append(Endpoint(f"/{name}/odom", "nav_msgs/msg/Odometry", "topic", f"the odometry {what}",
+                                        name, "drive", "drive"))
+                    out.append(Endpoint(f"/{name}/cmd_vel", "geometry_msgs/msg/Twist", "topic",
+                                        f"the cmd_vel {what}", name, "drive", "drive"))
         for lidar in sim.lidars:
-            out[f"/{lidar.robot}/{lidar.model.name}"] = "sensor_msgs/msg/LaserScan"
+            out.append(Endpoint(f"/{lidar.robot}/{lidar.model.name}", "sensor_msgs/msg/LaserScan", "topic",
+                                f"the scans of <lidar name='{lidar.model.name}'> of robot '{lidar.robot}'",
+                                lidar.robot, f"lidar:{lidar.model.name}", "lidar"))
         return out
 
     # ------------------------------------------------------------------ incoming

@@ -9,15 +9,17 @@ the step's simulated time. The simulate_steps action has its own small node and 
 from __future__ import annotations
 
 import logging
-import re
 import sys
 import threading
 import time
 from typing import TYPE_CHECKING, Any
 
-from sigcore.transport import Transport
+from sigcore.api.call import log_key
+from sigcore.text import clip
+from sigcore.transport import Endpoint, Transport, publication_endpoints
 
 from .config import Ros2Config, config_for
+from .logfilter import OncePerKind
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
@@ -35,24 +37,6 @@ FLUSH_TIMEOUT = 2.0
 
 READY_TOPIC = "/sigcore/ready"
 """Latched std_msgs/Bool, true once every endpoint exists (and false when the simulation stops)."""
-
-
-class _OncePerKind(logging.Filter):
-    """Let each refusal message through once per (endpoint, message with numbers blanked)."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.seen: set[str] = set()
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        if record.levelno >= logging.ERROR:
-            return True
-        key = re.sub(r"[-+]?\d[\d.e+-]*|nan|inf", "#", record.getMessage())[:200]
-        if key in self.seen:
-            return False
-        if len(self.seen) < 10_000:
-            self.seen.add(key)
-        return True
 
 
 class Ros2Transport(Transport):
@@ -79,31 +63,53 @@ class Ros2Transport(Transport):
         self._node_name = node_name
         self._sim: Simulation | None = None
         self._context: Any = None
-        self._filter = _OncePerKind()
+        self._filter = OncePerKind()
         self._idle_clock = 0.0
         self.endpoints: dict[str, str] = {}
         """Every endpoint created, name -> ROS type (after :meth:`start`)."""
 
     # ------------------------------------------------------------------ Transport
-    def describe(self, sim: Simulation) -> dict[str, str]:
-        """Every endpoint :meth:`start` creates for ``sim`` (name -> type), without ROS: the agents' subscriptions
-        and services, the declared publications, the idiomatic topics, simulation_interfaces, readiness."""
+    def plan(self, sim: Simulation) -> list[Endpoint]:
+        """Every endpoint :meth:`start` creates for ``sim``, with who asked for it, without ROS: the agents'
+        subscriptions and services, the declared publications, the idiomatic topics, simulation_interfaces,
+        readiness (:meth:`describe` lists their names and types)."""
         from .sigros import SigRosEndpoints
         from .siminterfaces import SERVICES
         from .standard import StandardEndpoints
 
         config = self._config or config_for(sim)
-        out: dict[str, str] = {}
+        out: list[Endpoint] = []
         if config.sigros:
-            out.update({entry.name_for(agent): entry.ros_type for entry, agent in SigRosEndpoints.plan(sim)})
-        out.update({p.topic: p.full_type for p in sim.publications.declared if config.sigros or not p.agent})
+            out += [Endpoint(entry.name_for(agent), entry.ros_type,
+                             "service" if entry.direction == "service" else "topic",
+                             f"'{entry.suffix}' of {sim.agents[agent].kind} '{agent}'", agent, "name")
+                    for entry, agent in SigRosEndpoints.plan(sim)]
+        out += publication_endpoints(sim, agents=config.sigros)
         if config.standard:
-            out.update(StandardEndpoints.plan(sim))
+            out += StandardEndpoints.plan(sim)
         prefix = config.sim_prefix
-        out.update({f"{prefix}/{name}": f"simulation_interfaces/srv/{srv.__name__}" for name, srv in SERVICES.items()})
-        out[f"{prefix}/simulate_steps"] = "simulation_interfaces/action/SimulateSteps"
-        out[READY_TOPIC] = "std_msgs/msg/Bool"
+        ros2 = "ros2" if sim.world.plugin("ros2") is not None else None
+        attribute = "sim_prefix" if ros2 else None
+        out += [Endpoint(f"{prefix}/{name}", f"simulation_interfaces/srv/{srv.__name__}", "service",
+                         f"the transport's simulation_interfaces service '{name}'", plugin=ros2, attribute=attribute)
+                for name, srv in SERVICES.items()]
+        out.append(Endpoint(f"{prefix}/simulate_steps", "simulation_interfaces/action/SimulateSteps", "action",
+                            "the transport's simulate_steps action", plugin=ros2, attribute=attribute))
+        out.append(Endpoint(READY_TOPIC, "std_msgs/msg/Bool", "topic", "the transport's readiness topic"))
         return out
+
+    def name_problem(self, name: str) -> str | None:
+        """rclpy's own rule for a full topic or service name (the core's when rclpy cannot be imported)."""
+        try:
+            from rclpy.exceptions import InvalidTopicNameException
+            from rclpy.validate_full_topic_name import validate_full_topic_name
+        except ImportError:
+            return super().name_problem(name)
+        try:
+            validate_full_topic_name(name)
+        except InvalidTopicNameException as e:
+            return str(e).splitlines()[0].removeprefix("Invalid topic name: ").rstrip(":")
+        return None
 
     # ------------------------------------------------------------------ Transport
     def start(self, sim: Simulation) -> None:
@@ -114,6 +120,7 @@ class Ros2Transport(Transport):
         from rclpy.executors import MultiThreadedExecutor
         from std_msgs.msg import Bool
 
+        from .nodeservices import NodeServices, guard_node, sim_time_overrides
         from .publications import PublicationEndpoints
         from .qos import Qos
         from .receiver import Receiver
@@ -131,11 +138,13 @@ class Ros2Transport(Transport):
             logging.getLogger(name).addFilter(self._filter)
         self._context = Context()
         rclpy.init(context=self._context, args=[])
-        node = rclpy.create_node(self._node_name, context=self._context)
+        node = rclpy.create_node(self._node_name, context=self._context, parameter_overrides=sim_time_overrides())
         self._node = node
         qos = Qos(config.qos)
         receiver = Receiver(self._context)
         self._receiver = receiver
+        # the node's own parameter and type description services, answered between steps like the others
+        self.node_services = NodeServices(node, receiver, lambda: sim.stamp_ns)
         self.sigros = SigRosEndpoints(sim, node, receiver, qos) if config.sigros else None
         self.standard = StandardEndpoints(sim, node, receiver, qos, config) if config.standard else None
         self.interfaces = SimInterfaces(sim, node, receiver, config.sim_prefix, self._after_reset)
@@ -146,6 +155,7 @@ class Ros2Transport(Transport):
                           **(self.standard.topics if self.standard else {}), **self.interfaces.names}
         # the action server on its own node and executor (it needs rclpy's waitable machinery)
         self._action_node = rclpy.create_node(f"{self._node_name}_actions", context=self._context)
+        guard_node(self._action_node)  # its parameter services run on the executor: never let them raise
         self.action = SimulateStepsAction(self._action_node, f"{config.sim_prefix}/simulate_steps",
                                           self.interfaces, self._submit)
         self.endpoints[f"{config.sim_prefix}/simulate_steps"] = "simulation_interfaces/action/SimulateSteps"
@@ -178,6 +188,7 @@ class Ros2Transport(Transport):
                 self.standard.publish_clock()
         if receiver.pending:
             receiver.drain()
+        self._filter.summary(log)
 
     def stop(self) -> None:
         """Answer what is still held, announce not-ready, and close every endpoint."""
@@ -205,15 +216,28 @@ class Ros2Transport(Transport):
             self._context.try_shutdown()
             self._context = None
             sys.setswitchinterval(self._switch)
+            self._filter.summary(log, force=True)
             for name in ("sigcore.api", "sigcore.ros2"):
                 logging.getLogger(name).removeFilter(self._filter)
 
     # ------------------------------------------------------------------ internals
     def _spin_actions(self) -> None:
-        try:
-            self._executor.spin()
-        except Exception:  # shut down
-            pass
+        """Spin the action node until shutdown; an exception of one callback is logged (once per kind), never the
+        end of the thread (rclpy's executor re-raises it from ``spin_once``)."""
+        from rclpy.executors import ExternalShutdownException, ShutdownException
+
+        executor, context = self._executor, self._context
+        while context.ok() and not self.action.closing:
+            try:
+                executor.spin_once(timeout_sec=0.5)
+            except (ExternalShutdownException, ShutdownException):
+                break
+            except Exception as e:  # e.g. an rclpy callback raising on a malformed request
+                if not context.ok() or self.action.closing:
+                    break
+                kind = type(e).__name__
+                log.error("a callback of node %s_actions raised %s: %s; still serving", self._node_name, kind,
+                          clip(str(e), 200), extra=log_key(f"{self._node_name}_actions", kind))
 
     def _submit(self, job: Any) -> None:
         """Run ``job()`` on the simulation thread at the next service (from another thread)."""

@@ -1,0 +1,64 @@
+"""No exception ends a transport thread: a raising callback on the action node's executor is logged once and the
+executor keeps serving (the transport runs in this process, the client in another)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import subprocess
+import sys
+from typing import Any
+
+import pytest
+
+pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
+pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
+
+from rosproc import CLIENTS, WORLD, ros_env  # noqa: E402
+from sigcore_ros2.transport import Ros2Transport  # noqa: E402
+
+from sigcore.sim.simulation import Simulation  # noqa: E402
+from sigcore.world import parse_world  # noqa: E402
+
+
+def test_a_raising_executor_callback_is_logged_once_and_the_executor_serves_on(
+        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    """Two requests whose callback raises: one ERROR naming the node and the exception, none of the thread's
+    end; the action node's and the main node's parameter services answer afterwards."""
+    env = ros_env()
+    for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
+        monkeypatch.setenv(key, env[key])
+    sim = Simulation(parse_world(WORLD), "mujoco")
+    sim.control.paused = True
+    transport = Ros2Transport()
+    transport.start(sim)
+
+    def boom(request: Any, response: Any) -> Any:
+        raise KeyError("planted by the test")
+
+    try:
+        raising = [s for s in transport._action_node.services if s.srv_name.endswith("/get_parameter_types")]
+        assert len(raising) == 1
+        raising[0].callback = boom
+        with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
+            proc = subprocess.Popen([sys.executable, str(CLIENTS / "raising.py")], env=env, text=True,
+                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+            try:
+                while proc.poll() is None:  # this thread is the simulation thread: serve the main node
+                    transport.service(0.05)
+                out, err = proc.communicate(timeout=5)
+            finally:
+                if proc.poll() is None:
+                    os.killpg(proc.pid, 9)
+    finally:
+        transport.stop()
+    assert proc.returncode == 0, err[-3000:]
+    result = json.loads(out.strip().splitlines()[-1])
+    assert result["raising"] == [False, False]  # no answer, but no end of the executor either
+    assert result["/sigcore_actions"] == result["/sigcore"] == ["use_sim_time", "start_type_description_service"]
+    errors = [r for r in caplog.records if r.levelno == logging.ERROR]
+    assert len(errors) == 1, [r.getMessage() for r in errors]
+    assert "sigcore_actions raised KeyError" in errors[0].getMessage()
+    summary = [r.getMessage() for r in caplog.records if "refusals/failures suppressed" in r.getMessage()]
+    assert len(summary) == 1 and "of sigcore_actions (KeyError)" in summary[0]  # the second one, counted
