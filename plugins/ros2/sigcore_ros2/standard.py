@@ -20,7 +20,9 @@ from tf2_msgs.msg import TFMessage
 
 from sigcore.agent.exceptions import ApiError
 from sigcore.agent.robot import RobotObj
+from sigcore.api.call import log_key
 from sigcore.sim.lidar import Scan
+from sigcore.text import clip
 from sigcore.transport import Endpoint
 
 from .cdr import CdrTemplate
@@ -87,7 +89,7 @@ class StandardEndpoints:
             self.scan_pub[(lidar.robot, lidar.model.name)] = node.create_publisher(LaserScan, topic,
                                                                                    qos.sensor(topic))
             self.topics[topic] = "sensor_msgs/msg/LaserScan"
-        self._warned: set[str] = set()
+        self._timed_out: set[str] = set()  # robots whose cmd_vel timeout was logged (once each)
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
         # the state messages, serialized once: each publication only rewrites their numbers
         moving = [name for name in sim.odometry if name in self.odom_pub]
@@ -131,11 +133,8 @@ class StandardEndpoints:
         def handle(msg: Twist) -> None:
             try:
                 robot.set_base_velocity(msg.linear.x, msg.angular.z)
-            except ApiError as e:
-                key = f"{topic}:{type(e).__name__}:{str(e)[:30]}"
-                if key not in self._warned:
-                    self._warned.add(key)
-                    log.warning("%s refused (logged once): %s", topic, e)
+            except ApiError as e:  # the transport's log filter lets one record per (topic, kind) through
+                log.warning("%s refused: %s", topic, clip(str(e)), extra=log_key(topic, type(e).__name__))
                 return
             if steps:
                 self._cmd_vel_deadline[robot.name] = self.sim.step_count + steps
@@ -149,8 +148,8 @@ class StandardEndpoints:
             if step >= deadline:
                 del self._cmd_vel_deadline[name]
                 self.sim.robot(name).set_wheel_velocity(0.0, 0.0)
-                if f"timeout:{name}" not in self._warned:
-                    self._warned.add(f"timeout:{name}")
+                if name not in self._timed_out:
+                    self._timed_out.add(name)
                     log.info("/%s/cmd_vel: no message for %g s: wheels stopped (cmd_vel_timeout of its <drive>; "
                              "logged once)", name, self.sim.drive(name).cmd_vel_timeout)
 
