@@ -21,6 +21,7 @@ from .world import WorldError, parse_world
 
 if TYPE_CHECKING:
     from .sim import Simulation
+    from .sim.startgate import StartGate
     from .transport import Transport
     from .world import World
 
@@ -100,12 +101,16 @@ def _entity_location(world: World, text: str) -> str:
 
 def _check_endpoints(transport: Transport | None, sim: Simulation) -> None:
     """Refuse (exit 2) a world whose endpoints ``transport`` cannot create: invalid or twice-used names."""
+    from .transport import TransportError
+
     if transport is None:
         return
     try:
         issues = transport.check(sim)
     except ImportError as e:  # the transport's libraries are missing: it cannot start anyway
         raise _fail([f"--transport {transport.name}: cannot plan its endpoints here ({e})"]) from None
+    except TransportError as e:  # its arguments do not fit this world (e.g. -p naming an agent it does not have)
+        raise _fail([f"{TRANSPORT_ARGS}: {e}"]) from None
     if issues:
         raise _fail([str(i) for i in issues])
 
@@ -141,6 +146,79 @@ def _transport(name: str | None) -> Transport | None:
     return cls()
 
 
+TRANSPORT_ARGS = "--ros-args"
+"""Everything after this on ``sigcore run``'s command line (up to an optional ``--``) is the transport's."""
+
+_transport_args: list[str] | None = None
+"""The arguments after ``--ros-args`` (set by :func:`main`; None: none given)."""
+
+
+def split_transport_args(argv: list[str]) -> tuple[list[str], list[str] | None]:
+    """``argv`` without the transport's arguments, and those arguments: everything after ``--ros-args`` up to an
+    optional ``--`` (what follows ``--`` is sigcore's again); None when ``--ros-args`` is absent."""
+    if TRANSPORT_ARGS not in argv:
+        return argv, None
+    i = argv.index(TRANSPORT_ARGS)
+    rest = argv[i + 1:]
+    end = rest.index("--") if "--" in rest else len(rest)
+    return argv[:i] + rest[end + 1:], rest[:end]
+
+
+def _configure(transport: Transport | None, transport_name: str | None) -> None:
+    """Hand the arguments after ``--ros-args`` to the transport (exit 2 if it has none or refuses them)."""
+    from .transport import TransportError
+
+    if _transport_args is None:
+        return
+    if transport is None:
+        why = ("--transport none has no transport to take them" if transport_name == "none" else
+               f"the default transport '{DEFAULT_TRANSPORT}' cannot start here (see the line above)")
+        raise _fail([f"{TRANSPORT_ARGS}: {why}; drop {TRANSPORT_ARGS} or run with a transport"])
+    try:
+        transport.configure(list(_transport_args))
+    except TransportError as e:
+        raise _fail([f"{TRANSPORT_ARGS}: {e}"]) from None
+
+
+def _gate(waits: list[str] | None, timeout: float, paused: bool, transport: Transport | None,
+          sim: Simulation | None = None) -> StartGate | None:
+    """The start gate of ``--wait-for`` (None without it); refuses (exit 2) a malformed or unknown topic, and
+    ``--wait-for`` without a transport or with ``--paused``."""
+    from .sim.startgate import StartGate, WaitFor
+
+    if not waits:
+        if timeout:
+            raise _fail(["--wait-timeout needs --wait-for TOPIC (the topics to wait for)"])
+        return None
+    if paused:
+        raise _fail(["--paused and --wait-for exclude each other: --paused waits for a client to set PLAYING, "
+                     "--wait-for plays by itself once the topics have their peers"])
+    if transport is None:
+        raise _fail(["--wait-for needs a transport (its topics' peers are counted); drop --transport none"])
+    from .transport import Transport
+
+    if type(transport).matched is Transport.matched:  # the base refuses: say so now, not after the start
+        raise _fail([f"--wait-for: transport '{transport.name}' does not support counting the peers of a topic"])
+    parsed = []
+    for text in waits:
+        try:
+            parsed.append(WaitFor.parse(text))
+        except ValueError as e:
+            raise _fail([f"--wait-for {e}"]) from None
+    if sim is not None:
+        from difflib import get_close_matches
+
+        topics = sorted({e.full_name for e in transport.plan(sim) if e.kind == "topic"})
+        for w in parsed:
+            if w.topic not in topics:
+                close = get_close_matches(w.topic, topics, n=4, cutoff=0.5)
+                few = close or [t for t in topics if t.count("/") > 1 or "_" not in t][:6]  # not <agent>_<suffix>
+                raise _fail([f"--wait-for {w.topic}: not a topic of this simulation's transport "
+                             f"'{transport.name}'; valid: e.g. {', '.join(few)} ({len(topics)} topics; "
+                             f"sigcore api {sim.world.source} --all lists them)"])
+    return StartGate(parsed, timeout, say=lambda line: err.print(line, markup=False, soft_wrap=True))
+
+
 def _check_pace(fast: bool, realtime: bool, factor: float | None) -> None:
     """Refuse more than one of the pace options."""
     given = [opt for opt, on in (("--fast", fast), ("--realtime", realtime), ("--factor", factor is not None)) if on]
@@ -173,6 +251,12 @@ def run(
         "--realtime", help="pace at real time, = --factor 1 (the default with a transport)")] = False,
     factor: Annotated[float | None, typer.Option(min=0.001, help="pace at this multiple of real time")] = None,
     paused: Annotated[bool, typer.Option("--paused", help="start paused (resume through a transport)")] = False,
+    wait_for: Annotated[list[str] | None, typer.Option(
+        "--wait-for", metavar="TOPIC[=N]", help="start paused at t = 0 and play once TOPIC has N (1) matched "
+        "subscribers (a topic the simulation publishes) or publishers (one it subscribes to); repeatable")] = None,
+    wait_timeout: Annotated[float, typer.Option(
+        min=0, help="with --wait-for: play anyway after this long, with a warning [s of wall time]; 0: wait "
+        "forever")] = 0.0,
     transport: Annotated[str | None, typer.Option(
         help=f"transport plugin; default '{DEFAULT_TRANSPORT}' when installed; 'none' for a bare batch run")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no progress display")] = False,
@@ -186,13 +270,17 @@ def run(
         "--callback-budget (after it returned), as if it had raised")] = False,
 ) -> None:
     """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
-    stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed."""
+    stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed. Arguments after
+    --ros-args (up to an optional --) go to the transport: -r FROM:=TO, -r __ns:=/NS, -p NAME:=VALUE,
+    --log-level LEVEL."""
     from .sim import run as run_sim
 
     _check_pace(fast, realtime, factor)
     if paused and transport == "none":
         raise _fail(["--paused needs a transport that can resume the simulation; drop --transport none"])
     transport_obj = _transport(transport)
+    _configure(transport_obj, transport)
+    _gate(wait_for, wait_timeout, paused, transport_obj)  # the options alone, before the world is built
     if paused and transport_obj is None:
         raise _fail([f"--paused needs a transport that can resume the simulation, and '{DEFAULT_TRANSPORT}' "
                      "cannot start here (see the line above)"])
@@ -202,6 +290,7 @@ def run(
         err.print("no --duration or --steps: running 10 simulated seconds")
     sim = _load(world_file, backend, controller)
     _check_endpoints(transport_obj, sim)
+    gate = _gate(wait_for, wait_timeout, paused, transport_obj, sim)
     total = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     show_progress = not quiet and total is not None
     t0 = time.perf_counter()
@@ -222,11 +311,13 @@ def run(
         if transport_obj is None:
             return
         pace = "as fast as possible" if rtf is None else f"at {rtf:g}x real time"
-        state = "paused" if s.control.paused else f"running {pace}"
+        state = ("paused until the --wait-for topics have their peers" if gate is not None and gate.active else
+                 "paused" if s.control.paused else f"running {pace}")
         err.print(f"ready: transport '{transport_obj.name}' is up, {state}; Ctrl-C or SIGTERM ends the run and "
                   "prints the results", markup=False, soft_wrap=True)
 
-    sim.control.paused = paused  # the simulation's own control: transports pause, step and stop through it
+    # the simulation's own control: transports pause, step and stop through it; --wait-for starts paused too
+    sim.control.paused = paused or gate is not None
     try:
         sim.dispatch.budget = CallbackBudget(callback_budget, disable_slow_controllers)
     except BudgetError as e:
@@ -236,7 +327,7 @@ def run(
     try:
         report = run_sim(sim, duration=duration, steps=steps, realtime_factor=rtf,
                          control=sim.control, transport=transport_obj, progress=progress,
-                         progress_every=2.0 if not tty else 0.25, started=started)
+                         progress_every=2.0 if not tty else 0.25, started=started, gate=gate)
     except KeyboardInterrupt as e:  # a second signal while stopping
         raise _fail([f"interrupted{f' ({e})' if str(e) else ''}: no results"], 130) from None
     if tty and show_progress:
@@ -330,6 +421,8 @@ def api(
                       markup=False)
     others = {p.topic: (p.full_type, f"{p.qos}, from {p.origin}") for p in sim.publications.declared
               if not p.agent}
+    if described:  # the transport may leave some agents' endpoints out (ROS 2: sigros_agents)
+        per_agent = {name: kind for name, kind in per_agent.items() if name in described}
     for name, kind in described.items():
         if name not in per_agent and name not in others:
             others[name] = (kind, f"transport {transport}")
@@ -377,8 +470,15 @@ def plugins_cmd() -> None:
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """Console-script entry point. Arguments after ``--ros-args`` (up to an optional ``--``) are the transport's
+    (``sigcore run`` only), taken out before typer parses the rest."""
+    global _transport_args
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    argv, _transport_args = split_transport_args(sys.argv[1:])
+    if _transport_args is not None and (not argv or argv[0] != "run"):
+        err.print(f"{TRANSPORT_ARGS} is taken by 'sigcore run' only (sigcore run WORLD [OPTIONS] {TRANSPORT_ARGS} "
+                  "-r FROM:=TO -p NAME:=VALUE ...)", markup=False, soft_wrap=True)
+        raise SystemExit(2)
     plugins.load_plugins()
     plugins.add_commands(app)
-    app()
+    app(args=argv)

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Collection
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar, Literal
 
+from .errors import SigcoreError
 from .world.names import full_name_problem
 
 if TYPE_CHECKING:
@@ -47,6 +49,11 @@ class Endpoint:
         return self.name if self.name.startswith("/") else "/" + self.name
 
 
+class TransportError(SigcoreError):
+    """A transport refused what it was asked before or while starting: arguments it does not take or that are
+    wrong, a question it cannot answer. The message names what was wrong and what is valid."""
+
+
 class Transport(ABC):
     """Exposes a simulation's agent API. The simulation loop calls it between steps, never during one, so the
     same inputs give the same results; a transport must never block the loop longer than ``service``'s timeout."""
@@ -85,6 +92,26 @@ class Transport(ABC):
 
         return plan_issues(sim.world, self.plan(sim), self.name, self.name_problem)
 
+    def configure(self, args: list[str]) -> None:
+        """Take the transport's own command-line arguments (``sigcore run WORLD ... --ros-args ARGS``, unparsed),
+        before :meth:`plan` and :meth:`start`; the default takes none.
+
+        Raises:
+            TransportError: this transport takes no arguments, or one of ``args`` is wrong (naming it and what is
+                valid).
+        """
+        raise TransportError(f"transport '{self.name}' does not support transport arguments (--ros-args)")
+
+    def matched(self, topic: str) -> tuple[int, str]:
+        """How many peers are matched with ``topic`` (a topic name of :meth:`plan`) now, after :meth:`start`, and
+        what they are: ``(n, "subscriber")`` for a topic the simulation publishes, ``(n, "publisher")`` for one it
+        subscribes to. ``sigcore run --wait-for`` polls it while the simulation waits to start.
+
+        Raises:
+            TransportError: this transport cannot tell (the default), or ``topic`` is not one of its topics.
+        """
+        raise TransportError(f"transport '{self.name}' does not support counting the peers of a topic (--wait-for)")
+
     @abstractmethod
     def start(self, sim: Simulation) -> None:
         """Create every endpoint for ``sim``'s agents (from the API table) and announce readiness."""
@@ -98,12 +125,12 @@ class Transport(ABC):
         """Close every endpoint."""
 
 
-def publication_endpoints(sim: Simulation, agents: bool = True) -> list[Endpoint]:
+def publication_endpoints(sim: Simulation, agents: bool | Collection[str] = True) -> list[Endpoint]:
     """The declared publications of ``sim`` (the core's and the features') as endpoints; ``agents``: also the
-    per-agent ones."""
+    per-agent ones (True: of every agent; a collection: of these agents only)."""
     out = []
     for p in sim.publications.declared:
-        if p.agent and not agents:
+        if p.agent and (not agents or (agents is not True and p.agent not in agents)):
             continue
         plugin = p.origin if sim.world.plugin(p.origin) is not None else None
         who = f"{p.agent}'s '{p.topic}'" if p.agent else f"the publication '{p.topic}' of {p.origin}"

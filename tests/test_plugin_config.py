@@ -39,7 +39,7 @@ EXPECTED = [
     (4, 26, "corect_box", ("(did you mean 'correct_box'?)", "valid: name, rules, service, correct_box")),
     (4, 41, "wrong_box", ("'minus' is not an integer; valid: an integer [points]",)),
     (4, 59, "floor", ("'maybe' is not a boolean; valid: true, false",)),
-    (5, 23, "clock_rte", ("(did you mean 'clock_rate'?)", "valid: name, clock_rate, state_rate")),
+    (5, 23, "clock_rte", ("(did you mean 'clock_rate'?)", "valid: name, clock_rate, clock_wall_limit, state_rate")),
     (5, 37, "state_rate", ("'often' is not a number", "state_rate > 0 [Hz]")),
     (5, 56, "sigros", ("'nope' is not a boolean",)),
 ]

@@ -25,6 +25,7 @@ from sigcore.world import (
     Gripper,
     Human,
     Lidar,
+    NamedPose,
     Object,
     PluginConfig,
     Pose,
@@ -60,13 +61,13 @@ BAD_FILES = [
     Bad("wrong_root.xml", 2, 1, "scene", None, ("root element is <scene>", "valid: <world>")),
     Bad("unknown_top_element.xml", 3, 3, "robt", None,
         ("unknown element inside <world>", "did you mean 'robot'?",
-         "valid: plugin, robot, object, human, agent")),
+         "valid: plugin, named_pose, robot, object, human, agent")),
     Bad("unknown_robot_child.xml", 4, 5, "camera", None,
         ("unknown element inside <robot>", "valid: drive, lidar, gripper, arm, gains")),
     Bad("unknown_attribute.xml", 3, 49, "object", "colour",
         ("unknown attribute", "did you mean 'color'?",
-         "valid: color, controller, friction, graspable, mass, mesh, name, pose, scale, shape, size, static, "
-         "tags, urdf")),
+         "valid: color, controller, description, friction, graspable, mass, mesh, name, pose, scale, shape, size, "
+         "static, tags, urdf")),
     Bad("missing_name.xml", 3, 3, "object", None, ("required attribute 'name' is missing",)),
     Bad("missing_urdf.xml", 3, 3, "robot", None, ("required attribute 'urdf' is missing",)),
     Bad("missing_drive_left.xml", 4, 5, "drive", None,
@@ -394,9 +395,10 @@ def test_agent_lookup_lists_names(full: World) -> None:
 _DOCUMENTED: dict[str, type[BaseModel]] = {
     "world": World, "plugin": PluginConfig, "robot": Robot, "drive": Drive, "lidar": Lidar,
     "gripper": Gripper, "arm": Arm, "gains": Gains, "object": Object, "human": Human, "agent": BareAgent,
+    "named_pose": NamedPose,
 }
 _NOT_ATTRIBUTES = {"kind", "lidars", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
-                   "config", "line", "column", "positions"}
+                   "config", "line", "column", "positions", "named_poses"}
 _BOUNDS = (annotated_types.Gt, annotated_types.Ge, annotated_types.Lt, annotated_types.Le)
 
 
@@ -416,7 +418,7 @@ def _default(field: FieldInfo) -> str:
     value = field.get_default(call_default_factory=True)
     if isinstance(value, Pose):
         value = value.xyz + value.rpy
-    if value is None or value == ():
+    if value is None or value == () or value == "":
         return "none"
     if isinstance(value, bool):
         return str(value).lower()

@@ -45,8 +45,11 @@ def main() -> int:
     env = {**os.environ, "ROS_DOMAIN_ID": str(args.domain if args.domain is not None else 100 + os.getpid() % 100),
            "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "PYTHONUNBUFFERED": "1"}
     t0 = time.perf_counter()
+    # the simulation holds at t = 0 until the robot node publishes commands and the moderator listens to the
+    # referee's events (docs/ros2.md, "Readiness"): neither node misses the task's beginning
     sim = _start([sys.executable, "-m", "sigcore", "run", str(ROOT / "worlds" / "cleanup.xml"), "--transport", "ros2",
-                  "--backend", args.backend, "--factor", str(args.factor), "--duration", "600", "--quiet"], env)
+                  "--backend", args.backend, "--factor", str(args.factor), "--duration", "600", "--quiet",
+                  "--wait-for", "/robot_000/cmd_vel", "--wait-for", "/referee/events"], env)
     moderator = [sys.executable, str(HERE / "moderator_node.py")]
     if args.referee_log:
         moderator += ["--log", args.referee_log]

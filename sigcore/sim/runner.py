@@ -16,6 +16,7 @@ from .control import RunControl, stop_on_signals
 from .dispatch import ControllerFailure, SlowCallbacks
 from .feature_guard import FeatureFailure
 from .simulation import Simulation
+from .startgate import StartGate
 
 log = logging.getLogger("sigcore")
 
@@ -69,7 +70,7 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         realtime_factor: float | None = None, control: RunControl | None = None,
         transport: Transport | None = None, progress: Callable[[Simulation], None] | None = None,
         progress_every: float = 0.5, started: Callable[[Simulation], None] | None = None,
-        handle_signals: bool = True) -> RunReport:
+        handle_signals: bool = True, gate: StartGate | None = None) -> RunReport:
     """Run ``sim`` until ``duration`` simulated seconds or ``steps`` steps have passed (or ``control.stop``).
 
     The simulation is started (:meth:`Simulation.start`), then the transport; at the end the transport is stopped
@@ -91,6 +92,8 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         progress_every: Wall seconds between progress calls [s].
         started: Called once the simulation and the transport have started, before the first step.
         handle_signals: Turn SIGINT and SIGTERM into a stop request for the duration of the run (main thread only).
+        gate: Holds a paused start until the named topics have their peers (``sigcore run --wait-for``); polled
+            between steps while active; needs ``transport``.
     """
     control = control or sim.control
     target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
@@ -107,7 +110,7 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
                     if started is not None:
                         started(sim)
                     wall = _loop(sim, target, start_step, realtime_factor, control, transport, progress,
-                                 progress_every)
+                                 progress_every, gate)
                 finally:
                     if transport is not None:
                         transport.stop()
@@ -128,7 +131,8 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
 
 
 def _loop(sim: Simulation, target: int | None, start_step: int, realtime_factor: float | None, control: RunControl,
-          transport: Transport | None, progress: Callable[[Simulation], None] | None, progress_every: float) -> float:
+          transport: Transport | None, progress: Callable[[Simulation], None] | None, progress_every: float,
+          gate: StartGate | None = None) -> float:
     """Step until ``target`` steps or a stop request; the wall-clock time the stepping took [s]."""
     wall0 = _time.perf_counter()
     pace_time, pace_wall = sim.time, wall0  # real-time pacing reference, moved on while paused
@@ -137,6 +141,8 @@ def _loop(sim: Simulation, target: int | None, start_step: int, realtime_factor:
         if transport is not None:
             idle = control.paused or (control.lockstep and control.pending_steps == 0)
             transport.service(0.01 if idle else 0.0)
+            if gate is not None and gate.active:
+                gate.poll(control, transport)
         if control.reset:
             control.reset = False
             sim.reset()

@@ -20,18 +20,21 @@ from ..backend import Array, Backend
 from ..feature import Feature
 from ..isolation import USER_ERRORS, describe
 from ..publish import Publication, Publications, Publisher
+from ..scene import Scene
 from ..text import quote
 from ..world.exceptions import WorldError, WorldIssue
 from ..world.models import Object, Robot, World
 from ..world.urdf import UrdfModel
 from .contacts import ContactTracker, rolling_parts
 from .control import RunControl
+from .description import DescriptionTopics
 from .dispatch import Dispatcher
 from .drive import DriveState
 from .exceptions import FeatureError
 from .feature_guard import OBSERVER_LISTS, FeatureFailure, FeatureGuard
 from .frames import Frames
 from .grasps import Grasps
+from .info import EntityInfos
 from .lidar import LidarSensor, Scan
 from .modes import Mode, Modes
 from .odometry import WheelOdometry
@@ -75,6 +78,8 @@ class Simulation:
         self.grasps = Grasps()
         """Who holds what (changed by ``RobotObj.grasp`` / ``release``; read by anyone)."""
         self.owners = Owners()
+        self.info = EntityInfos(world.entities)
+        """Category, description and tags of every entity (``set_entity_info`` changes them, a reset restores)."""
         self.services: dict[str, Callable[[str, str], None]] = {}
         self.connections: dict[str, set[str]] = {}
         self._modes = Modes(self.backend, world.entities)
@@ -100,6 +105,10 @@ class Simulation:
         self.publications = Publications(lambda: self.step_count * self._dt_ns, self._attach_sources)
         self._sources: list[tuple[Source, dict[str, Publisher], str | None]] = []  # (source, publishers, feature)
         self.frames = Frames(self)
+        self.scene = Scene(world, self.backend, self.frames.name)
+        """Every entity's visual geometry and bounds (``sigcore.scene``); ``robot_description`` and
+        ``/sigcore/scene`` are published from it."""
+        DescriptionTopics(self)
         self._attach_controllers(controllers or {})
         self.features: dict[str, Feature] = {}
         self.feature_guard = FeatureGuard()
@@ -447,6 +456,7 @@ class Simulation:
         self._wrench.clear()
         self._outbox.clear()
         self._modes.reset()
+        self.info.reset()
         self._contacts.reset()
         for odo in self.odometry.values():
             odo.reset()

@@ -10,6 +10,7 @@ from .models import (
     Gripper,
     Human,
     Lidar,
+    NamedPose,
     Object,
     PluginConfig,
     Pose,
@@ -20,7 +21,7 @@ from .parser import parse_world
 from .urdf import UrdfDocument, UrdfError, UrdfFiles, UrdfJoint, UrdfModel, read_urdf
 
 __all__ = [
-    "Arm", "BareAgent", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "Object", "PluginConfig",
+    "Arm", "BareAgent", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "NamedPose", "Object", "PluginConfig",
     "Pose", "Robot", "UrdfDocument", "UrdfError", "UrdfFiles", "UrdfJoint", "UrdfModel", "World", "WorldError",
     "WorldIssue", "parse_world", "read_urdf",
 ]

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
     BeforeValidator,
     ConfigDict,
@@ -76,6 +77,50 @@ Vec6 = Annotated[tuple[float, float, float, float, float, float], _numbers(6)]
 Floats = Annotated[tuple[float, ...], _numbers(None)]
 Name = Annotated[str, Field(pattern=NAME_PATTERN, max_length=64)]
 Tags = Annotated[tuple[str, ...], BeforeValidator(lambda v: tuple(v.split()) if isinstance(v, str) else v)]
+
+MAX_TAGS = 64
+"""Most tags one entity or named pose may carry."""
+
+MAX_TAG_LENGTH = 64
+"""Longest tag [characters]."""
+
+MAX_DESCRIPTION = 1000
+"""Longest description of an entity or named pose [characters]."""
+
+
+def check_tags(tags: tuple[str, ...]) -> tuple[str, ...]:
+    """``tags`` if each is a non-empty printable word without whitespace, at most :data:`MAX_TAG_LENGTH`
+    characters, and there are at most :data:`MAX_TAGS` of them.
+
+    Raises:
+        ValueError: naming the first tag that breaks a rule and the rule.
+    """
+    if len(tags) > MAX_TAGS:
+        raise ValueError(f"{len(tags)} tags; valid: at most {MAX_TAGS}")
+    for tag in tags:
+        if not isinstance(tag, str) or not tag:
+            raise ValueError(f"tag {tag!r} is empty or not text; valid: non-empty words")
+        if len(tag) > MAX_TAG_LENGTH:
+            raise ValueError(f"tag {tag[:20]!r}... has {len(tag)} characters; valid: at most {MAX_TAG_LENGTH}")
+        if any(c.isspace() for c in tag) or not tag.isprintable():
+            raise ValueError(f"tag {tag[:40]!r} holds whitespace or control characters; valid: one printable word "
+                             "per tag")
+    return tags
+
+
+def check_description(text: str) -> str:
+    """``text`` if it has at most :data:`MAX_DESCRIPTION` characters.
+
+    Raises:
+        ValueError: it is longer.
+    """
+    if len(text) > MAX_DESCRIPTION:
+        raise ValueError(f"description of {len(text)} characters; valid: at most {MAX_DESCRIPTION}")
+    return text
+
+
+EntityTags = Annotated[Tags, AfterValidator(check_tags)]
+Description = Annotated[str, AfterValidator(check_description)]
 
 
 class _Model(BaseModel):
@@ -212,7 +257,8 @@ class Robot(_Model):
     grippers: tuple[Gripper, ...] = ()
     arms: tuple[Arm, ...] = ()
     gains: Gains = Gains()
-    tags: Tags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
+    tags: EntityTags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
+    description: Description = Field(default="", description="human-readable description (get_entity_info)")
 
 
 Shape = Literal["box", "sphere", "cylinder", "capsule"]
@@ -238,7 +284,8 @@ class Object(_Model):
     mass: float = Field(default=1.0, gt=0, le=1e5, description="in [kg] (ignored when static)")
     static: bool = Field(default=False, description="fixed in place, not moved by physics")
     graspable: bool = Field(default=False, description="grippers may grasp it")
-    tags: Tags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
+    tags: EntityTags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
+    description: Description = Field(default="", description="human-readable description (get_entity_info)")
     pose: PoseField = Field(default=Pose(), description="'x y z' [m] or 'x y z roll pitch yaw' [m, rad]")
     color: Vec4 = Field(default=(0.7, 0.7, 0.7, 1.0), description="'r g b a', each from 0 to 1")
     friction: float = Field(default=1.0, ge=0, le=10, description="sliding friction coefficient")
@@ -287,7 +334,8 @@ class Human(_Model):
     mass: float = Field(default=70.0, gt=0, le=500, description="in [kg]")
     static: bool = Field(default=True, description="held in place (moved only through the API)")
     controller: str | None = Field(default=None, description=_CONTROLLER)
-    tags: Tags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
+    tags: EntityTags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
+    description: Description = Field(default="", description="human-readable description (get_entity_info)")
 
 
 class BareAgent(_Model):
@@ -300,6 +348,36 @@ class BareAgent(_Model):
 
 Entity = Robot | Object | Human
 AgentModel = Robot | Object | Human | BareAgent
+
+
+class NamedPose(_Model):
+    """``<named_pose>``: a pose in ``world`` with a purpose (a drop or pick pose, a navigation goal, a spawn
+    point), listed by the simulation_interfaces service ``get_named_poses``."""
+
+    name: Name = Field(description="unique among the named poses (a robot's '<robot>_start' is taken)")
+    pose: PoseField = Field(description="'x y z' [m] or 'x y z roll pitch yaw' [m, rad] in world")
+    tags: EntityTags = Field(default=(), description="space-separated labels, e.g. 'drop navigation_goal'")
+    description: Description = Field(default="", description="human-readable description")
+    bounds: Vec6 | None = Field(default=None, description="'min_x min_y min_z max_x max_y max_z': an axis-aligned "
+                                                          "box in world, as offsets from the pose's position [m]")
+
+    @field_validator("bounds")
+    @classmethod
+    def _bounds(cls, v: tuple[float, ...] | None) -> tuple[float, ...] | None:
+        if v is not None and not all(v[i] < v[i + 3] for i in range(3)):
+            got = " ".join(f"{c:g}" for c in v)
+            raise ValueError(f"{got} is not min < max on every axis; valid: 'min_x min_y min_z max_x max_y max_z' "
+                             "[m], e.g. '-0.3 -0.3 0 0.3 0.3 1.5'")
+        return v
+
+
+START_POSE_TAGS = ("spawn", "start")
+"""Tags of the automatic named pose ``<robot>_start`` of every robot."""
+
+
+def start_pose_name(robot: str) -> str:
+    """The name of robot ``robot``'s automatic named pose (its pose in the world file)."""
+    return f"{robot}_start"
 
 
 class World(_Model):
@@ -320,6 +398,7 @@ class World(_Model):
         return v
     plugins: tuple[PluginConfig, ...] = ()
     agents: tuple[AgentModel, ...] = ()
+    named_poses: tuple[NamedPose, ...] = ()
     source: Path = Path("<memory>")
     _locations: dict[tuple[str, str | None], tuple[int, int]] = PrivateAttr(default_factory=dict)
     _urdfs: UrdfFiles = PrivateAttr(default_factory=UrdfFiles)
@@ -354,6 +433,15 @@ class World(_Model):
     def entities(self) -> tuple[Entity, ...]:
         """Agents with a body (robots, objects, humans)."""
         return tuple(a for a in self.agents if not isinstance(a, BareAgent))
+
+    def all_named_poses(self) -> tuple[NamedPose, ...]:
+        """The ``<named_pose>`` elements, then each robot's start pose ``<robot>_start`` (tags ``spawn start``,
+        its ``pose`` attribute, no bounds)."""
+        starts = tuple(NamedPose.model_construct(name=start_pose_name(r.name), pose=r.pose, tags=START_POSE_TAGS,
+                                                 description=f"start pose of robot {r.name} (world file)",
+                                                 bounds=None)
+                       for r in self.agents if isinstance(r, Robot))
+        return self.named_poses + starts
 
     def plugin(self, name: str) -> PluginConfig | None:
         """The ``<plugin name=...>`` entry, if enabled."""

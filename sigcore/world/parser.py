@@ -22,10 +22,12 @@ from .models import (
     Gripper,
     Human,
     Lidar,
+    NamedPose,
     Object,
     PluginConfig,
     Robot,
     World,
+    start_pose_name,
 )
 from .urdf import UrdfError, UrdfFiles, UrdfModel, resolve_mesh
 
@@ -39,7 +41,7 @@ _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
     "gains": (Gains, "gains", False),
 }
 _INTERNAL_FIELDS = {"kind", "lidars", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
-                    "config", "line", "column", "positions"}
+                    "config", "line", "column", "positions", "named_poses"}
 _LIBXML_POSITION = re.compile(r", line \d+, column \d+$")
 
 
@@ -143,7 +145,14 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
         raise WorldError(reader.issues)
     agents: list[Any] = []
     plugins: list[Any] = []
-    for child in reader.children_of(root, {"plugin": 1, **_AGENTS}):
+    poses: list[Any] = []
+    for child in reader.children_of(root, {"plugin": 1, "named_pose": 1, **_AGENTS}):
+        if child.tag == "named_pose":
+            reader.children_of(child, {})
+            pose = reader.build(child, NamedPose, {})
+            if pose is not None:
+                poses.append((child, pose))
+            continue
         if child.tag == "plugin":
             plugin = _plugin(reader, child)
             if plugin is not None:
@@ -154,8 +163,11 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
             agents.append((child, agent))
     _unique(reader, agents, "name", "every agent needs its own name")
     _unique(reader, plugins, "name", "enable a plugin once")
+    _unique(reader, poses, "name", "every named pose needs its own name")
+    _automatic_poses(reader, poses, [a for _, a in agents])
     world = reader.build(root, World, {"agents": tuple(a for _, a in agents),
-                                       "plugins": tuple(p for _, p in plugins), "source": path})
+                                       "plugins": tuple(p for _, p in plugins),
+                                       "named_poses": tuple(p for _, p in poses), "source": path})
     if reader.issues or world is None:
         raise WorldError(sorted(reader.issues, key=lambda i: (i.line, i.column)))
     reader.locations[("", None)] = reader.map.element(root)  # the <world> element (World.location(""))
@@ -327,6 +339,15 @@ def _check_robot(reader: _Reader, urdf: UrdfModel, file: str, children: dict[str
             link = getattr(value, attr)
             if link not in urdf.links:
                 reader.issue(child, attr, f"no link '{link}' in {file}; valid: {', '.join(urdf.links)}")
+
+
+def _automatic_poses(reader: _Reader, poses: list[Any], agents: list[Any]) -> None:
+    """Report every named pose that takes the name of a robot's automatic start pose."""
+    starts = {start_pose_name(a.name): a.name for a in agents if isinstance(a, Robot)}
+    for element, pose in poses:
+        if pose.name in starts:
+            reader.issue(element, "name", f"'{pose.name}' is the automatic start pose of robot "
+                                          f"'{starts[pose.name]}'; valid: another name")
 
 
 def _unique(reader: _Reader, items: list[Any], attr: str, rule: str) -> None:

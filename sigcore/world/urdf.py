@@ -34,6 +34,10 @@ class UrdfJoint:
     lower: float | None = None
     upper: float | None = None
     axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    origin_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """``<origin xyz>``: the child link's frame in the parent's at angle 0 [m]."""
+    origin_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """``<origin rpy>``: its fixed-axis roll, pitch, yaw [rad]."""
 
     @property
     def movable(self) -> bool:
@@ -211,8 +215,10 @@ def _names(path: Path, root: etree._Element) -> UrdfModel:
             axis = ()
         if len(axis) != 3:
             raise UrdfError(path, e.sourceline or 0, f"joint '{e.get('name')}': <axis xyz> needs 3 numbers")
+        origin = e.find("origin")
+        xyz, rpy = (_joint_origin(path, e, origin, attribute) for attribute in ("xyz", "rpy"))
         joint = UrdfJoint(str(e.get("name")), jtype, str(parent.get("link")), str(child.get("link")), lower,
-                          upper, (axis[0], axis[1], axis[2]))
+                          upper, (axis[0], axis[1], axis[2]), xyz, rpy)
         for link in (joint.parent, joint.child):
             if link not in links:
                 raise UrdfError(path, e.sourceline or 0, f"joint '{joint.name}' names unknown link '{link}'")
@@ -223,6 +229,23 @@ def _names(path: Path, root: etree._Element) -> UrdfModel:
         raise UrdfError(path, root.sourceline or 0, f"expected one root link, found {roots}")
     meshes = tuple(str(m.get("filename")) for m in root.iter("mesh"))
     return UrdfModel(str(root.get("name", path.stem)), links, tuple(joints), roots[0], meshes)
+
+
+def _joint_origin(path: Path, joint: etree._Element, origin: etree._Element | None,
+                  attribute: str) -> tuple[float, float, float]:
+    """``<origin xyz>`` or ``<origin rpy>`` of ``joint`` (zeros if absent); ``UrdfError`` unless 3 finite numbers."""
+    text = origin.get(attribute) if origin is not None else None
+    if text is None:
+        return (0.0, 0.0, 0.0)
+    try:
+        values = tuple(float(v) for v in text.split())
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        assert origin is not None
+        raise UrdfError(path, origin.sourceline or 0, f"joint '{joint.get('name')}': <origin {attribute}="
+                                                      f"{text[:40]!r}> needs 3 finite numbers")
+    return (values[0], values[1], values[2])
 
 
 MAX_LINKS = 500

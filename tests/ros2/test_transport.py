@@ -47,8 +47,9 @@ def expected_endpoints() -> tuple[dict[str, str], dict[str, str]]:
                    "/bot/cmd_vel": "geometry_msgs/msg/Twist", "/bot/odom": "nav_msgs/msg/Odometry",
                    "/bot/joint_states": "sensor_msgs/msg/JointState", "/bot/scan": "sensor_msgs/msg/LaserScan"})
     for name in ("get_simulator_features", "get_entities", "get_entity_state", "set_entity_state",
-                 "get_entities_states", "spawn_entity", "delete_entity", "get_simulation_state",
-                 "set_simulation_state", "reset_simulation", "step_simulation"):
+                 "get_entities_states", "get_entity_info", "set_entity_info", "get_entity_bounds",
+                 "get_named_poses", "get_named_pose_bounds", "spawn_entity", "delete_entity",
+                 "get_simulation_state", "set_simulation_state", "reset_simulation", "step_simulation"):
         camel = "".join(p.capitalize() for p in name.split("_"))
         services[f"/{name}"] = f"simulation_interfaces/srv/{camel}"
     services["/simulate_steps/_action/send_goal"] = "simulation_interfaces/action/SimulateSteps_SendGoal"

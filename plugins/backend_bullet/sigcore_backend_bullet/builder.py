@@ -19,6 +19,7 @@ import os
 import pybullet as pb
 
 from sigcore.backend import MAIN, BackendError
+from sigcore.scene import human_dimensions
 from sigcore.world.meshes import mesh_problem
 from sigcore.world.models import Human, Object, Robot, World
 from sigcore.world.urdf import UrdfDocument, UrdfError
@@ -216,13 +217,6 @@ def _primitive(client: int, shape: str, size: tuple[float, ...]) -> int:
         return int(pb.createCollisionShape(pb.GEOM_SPHERE, radius=size[0], physicsClientId=client))
     kind = pb.GEOM_CYLINDER if shape == "cylinder" else pb.GEOM_CAPSULE
     return int(pb.createCollisionShape(kind, radius=size[0], height=size[1], physicsClientId=client))
-
-
-def human_dimensions(height: float) -> tuple[float, float, float]:
-    """``(body radius, head radius, top of the body capsule)`` [m] of a standing person ``height`` [m] tall
-    (the MuJoCo backend's figures: the capsule stands on the feet, the head reaches ``height``)."""
-    body, head = 0.09 * height, 0.065 * height
-    return body, head, height - 2 * head
 
 
 def _add_human(client: int, human: Human) -> EntityIndex:

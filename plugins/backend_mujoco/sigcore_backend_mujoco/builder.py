@@ -26,6 +26,7 @@ import numpy as np
 
 from sigcore.backend import BackendError
 from sigcore.geometry import quat_from_rpy
+from sigcore.scene import HUMAN_COLOR, human_dimensions
 from sigcore.world.models import Human, Object, Pose, Robot, World
 from sigcore.world.urdf import UrdfDocument, UrdfError
 
@@ -260,15 +261,6 @@ def _primitive(shape: str, size: tuple[float, ...]) -> tuple[mujoco.mjtGeom, lis
     return _GEOM.mjGEOM_CAPSULE, [size[0], size[1] / 2, 0.0]
 
 
-def human_dimensions(height: float) -> tuple[float, float, float]:
-    """``(body radius, head radius, top of the body capsule)`` [m] of a standing person ``height`` [m] tall.
-
-    The body capsule stands on the feet (z = 0); the head sphere touches its top and reaches ``height``.
-    """
-    body, head = 0.09 * height, 0.065 * height
-    return body, head, height - 2 * head
-
-
 def _add_human(spec: mujoco.MjSpec, human: Human) -> EntityPlan:
     pos, quat = _frame(human.pose)
     name = prefix(human.name) + "main"
@@ -276,7 +268,7 @@ def _add_human(spec: mujoco.MjSpec, human: Human) -> EntityPlan:
     body.add_freejoint(name=prefix(human.name) + FREE_JOINT)
     r_body, r_head, top = human_dimensions(human.height)
     style = dict(group=GROUP_COLLISION, contype=NORMAL[0], conaffinity=NORMAL[1], priority=ENTITY_PRIORITY,
-                 rgba=[0.9, 0.7, 0.55, 1.0])
+                 rgba=list(HUMAN_COLOR))
     body.add_geom(name=name, type=_GEOM.mjGEOM_CAPSULE, fromto=[0, 0, r_body, 0, 0, top - r_body],
                   size=[r_body, 0, 0], mass=0.92 * human.mass, **style)
     body.add_geom(name=prefix(human.name) + "head", type=_GEOM.mjGEOM_SPHERE, pos=[0, 0, top + r_head],

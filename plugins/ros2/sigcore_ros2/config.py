@@ -13,13 +13,19 @@ from __future__ import annotations
 import re
 from typing import TYPE_CHECKING, Annotated
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, field_validator
 
 from sigcore.feature import Feature, FeatureConfig
+from sigcore.world import BareAgent
+from sigcore.world.exceptions import FieldError
 from sigcore.world.plugin_config import validate_plugin
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
+    from sigcore.world import World
+
+CLOCK_WALL_LIMIT = 200.0
+"""Default most /clock messages per second of wall time [Hz] (see ``docs/ros2.md``, "The /clock policy")."""
 
 QOS_WORDS = ("reliable", "best_effort", "volatile", "transient_local", "keep_all")
 """Words of a QoS override; ``depth=N`` sets a keep-last depth."""
@@ -75,24 +81,62 @@ def _qos(value: object) -> object:
 
 QosField = Annotated[dict[str, QosOverride], BeforeValidator(_qos)]
 
+AGENT_KINDS = {"robots": "robot", "objects": "object", "humans": "human", "agents": "agent"}
+"""The kinds ``sigros_agents`` may name, and the agent kind each selects."""
+
+
+def _words(value: object) -> object:
+    return tuple(value.split()) if isinstance(value, str) else value
+
+
+def _selection(words: tuple[str, ...]) -> tuple[str, ...]:
+    """``words`` if each is ``all`` (alone), a kind, ``tag:NAME`` or a name (the world's names are checked by
+    :func:`sigros_agents`)."""
+    if not words:
+        raise ValueError("empty; valid: 'all', or agent names, kinds (robots, objects, humans, agents), tag:NAME")
+    if "all" in words and len(words) > 1:
+        raise ValueError("'all' selects every agent: give it alone, or name agents, kinds or tags")
+    for word in words:
+        if not re.fullmatch(r"all|tag:\S+|[A-Za-z][A-Za-z0-9_]*", word):
+            raise ValueError(f"'{word}' is not an agent name, a kind or tag:NAME; valid: 'all', agent names, "
+                             "robots, objects, humans, agents, tag:NAME")
+    return words
+
+
+AgentSelection = Annotated[tuple[str, ...], BeforeValidator(_words), AfterValidator(_selection)]
+
 
 class Ros2Config(FeatureConfig):
     """Settings of the ROS 2 transport: the attributes of ``<plugin name="ros2">``, validated by the core.
 
     Attributes:
-        clock_rate: /clock publication rate [Hz]; 0 publishes every step (the default).
+        clock_rate: /clock publication rate [Hz of simulated time]; 0 publishes every step (the default), subject
+            to ``clock_wall_limit``.
+        clock_wall_limit: Most /clock messages per second of wall time [Hz]; a step whose state is published
+            (``state_rate``) or a scan always has its /clock first; 0: no limit (every step).
         state_rate: Rate of /tf, odom and joint_states [Hz].
+        entity_tf_rate: Rate of the ``world -> <entity>`` transforms of objects and humans on /tf [Hz]; 0: off.
         sim_prefix: Prefix of the simulation_interfaces services and action (e.g. ``/sim``; default: root).
         sigros: Create the sig_ros-compatible ``<agent>_<suffix>`` endpoints.
+        sigros_agents: The agents that get them: ``all``, or agent names, kinds (``robots``, ``objects``,
+            ``humans``, ``agents``) and ``tag:NAME``; the others' entities still exist (TF, simulation_interfaces).
         standard: Create the idiomatic topics (/clock, /tf, cmd_vel, odom, joint_states, scans).
         qos: Per-topic QoS overrides, by absolute topic name.
     """
 
     clock_rate: float = Field(default=0.0, ge=0.0, description="/clock publication rate in [Hz]; 0: every step")
+    clock_wall_limit: float = Field(default=CLOCK_WALL_LIMIT, ge=0.0, le=1e6,
+                                    description="at most this many /clock messages per second of wall time in [Hz], "
+                                                "besides the one before each stamped state message; 0: no limit")
     state_rate: float = Field(default=50.0, gt=0.0, description="rate of /tf, odom and joint_states in [Hz]")
+    entity_tf_rate: float = Field(default=10.0, ge=0.0, le=1e4,
+                                  description="rate of the world -> <entity> transforms of objects and humans on "
+                                              "/tf in [Hz]; 0: off")
     sim_prefix: str = Field(default="", description="namespace of the simulation_interfaces services, e.g. "
                                                     "'/sim' (default: root)")
     sigros: bool = Field(default=True, description="create the sig_ros-compatible <agent>_<suffix> endpoints")
+    sigros_agents: AgentSelection = Field(default=("all",), description="the agents that get <agent>_<suffix> "
+                                          "endpoints: 'all', or agent names, kinds, tag:NAME")
     standard: bool = Field(default=True, description="create the idiomatic topics (/clock, /tf, cmd_vel, ...)")
     qos: QosField = Field(default_factory=dict, description="per-topic QoS overrides, 'TOPIC: WORDS; ...'")
 
@@ -112,7 +156,35 @@ class Ros2Feature(Feature):
     config_model = Ros2Config
 
     def __init__(self, sim: Simulation, config: Ros2Config) -> None:
+        unknown = sigros_agents(sim.world, config.sigros_agents)[1]
+        if unknown:
+            raise FieldError("sigros_agents", unknown)
         self.config = config
+
+
+def sigros_agents(world: World, words: tuple[str, ...]) -> tuple[set[str], str | None]:
+    """The agents of ``world`` that ``words`` (``sigros_agents``) selects, and why a word selects nothing (it
+    names no agent, kind or tag of the world; with the valid ones), or None."""
+    if words == ("all",):
+        return {a.name for a in world.agents}, None
+    names = {a.name: a for a in world.agents}
+    tags = sorted({t for a in world.agents if not isinstance(a, BareAgent) for t in a.tags})
+    selected: set[str] = set()
+    for word in words:
+        if word in AGENT_KINDS:
+            selected |= {a.name for a in world.agents if a.kind == AGENT_KINDS[word]}
+        elif word.startswith("tag:"):
+            tag = word[4:]
+            if tag not in tags:
+                return selected, (f"no agent has the tag '{tag}'; tags of this world: {', '.join(tags) or 'none'}")
+            selected |= {a.name for a in world.agents if not isinstance(a, BareAgent) and tag in a.tags}
+        elif word in names:
+            selected.add(word)
+        else:
+            few = ", ".join(list(names)[:6]) + (", ..." if len(names) > 6 else "")
+            return selected, (f"'{word}' is no agent, kind or tag of this world; valid: all, "
+                              f"{', '.join(AGENT_KINDS)}, tag:NAME, or an agent name ({few})")
+    return selected, None
 
 
 def config_for(sim: Simulation) -> Ros2Config:

@@ -11,6 +11,7 @@ import array
 import importlib
 import logging
 import time
+from collections.abc import Callable, Collection
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -87,11 +88,15 @@ class PublicationEndpoints(PublicationSink):
     Args:
         node: The node that owns the publishers.
         qos: QoS profiles (per-topic overrides from the world apply).
-        agent_topics: Whether the agents' ``<agent><suffix>`` publications (the sig_ros family) get endpoints.
+        agent_topics: Whether the agents' ``<agent><suffix>`` publications (the sig_ros family) get endpoints
+            (a collection: those of these agents only).
     """
 
-    def __init__(self, node: Node, qos: Qos, agent_topics: bool = True) -> None:
+    def __init__(self, node: Node, qos: Qos, agent_topics: bool | Collection[str] = True,
+                 before: Callable[[], None] | None = None) -> None:
         self.node = node
+        self.before = before
+        """Called before each value is published (the transport puts the step's time on /clock first)."""
         self.qos = qos
         self.agent_topics = agent_topics
         self.publishers: dict[str, tuple[Any, Any]] = {}
@@ -106,7 +111,8 @@ class PublicationEndpoints(PublicationSink):
 
     def declare(self, publication: Publication) -> None:
         """Create the publisher (a type whose interface package is not built is left out with one warning)."""
-        if publication.agent and not self.agent_topics:
+        if publication.agent and (not self.agent_topics or (self.agent_topics is not True
+                                                             and publication.agent not in self.agent_topics)):
             return
         if publication.topic in self.publishers:
             return
@@ -129,6 +135,8 @@ class PublicationEndpoints(PublicationSink):
         if entry is None:
             return
         pub, cls = entry
+        if self.before is not None:
+            self.before()
         pub.publish(fill_message(cls(), value))
 
     def flush(self, timeout: float) -> bool:

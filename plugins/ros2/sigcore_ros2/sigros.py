@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from collections.abc import Collection
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -43,14 +44,16 @@ class SigRosEndpoints:
         node: The node that owns the endpoints.
         receiver: Where subscriptions and services are registered.
         qos: QoS profiles.
+        agents: The agents that get endpoints (``sigros_agents``); None: every agent.
     """
 
-    def __init__(self, sim: Simulation, node: Node, receiver: Receiver, qos: Qos) -> None:
+    def __init__(self, sim: Simulation, node: Node, receiver: Receiver, qos: Qos,
+                 agents: Collection[str] | None = None) -> None:
         self.sim = sim
         self.held: list[_Held] = []
         self.names: dict[str, str] = {}  # endpoint name -> ROS type, for tests and docs
         self.missing: set[str] = set()  # API types with no built ROS 2 type (a feature newer than the build)
-        for entry, agent in self.plan(sim):
+        for entry, agent in self.plan(sim, agents):
             name = entry.name_for(agent)
             try:
                 ros_type(entry, "srv" if entry.direction == "service" else "msg")
@@ -72,12 +75,12 @@ class SigRosEndpoints:
             self.names[name] = entry.ros_type
 
     @staticmethod
-    def plan(sim: Simulation) -> list[tuple[ApiEntry, str]]:
+    def plan(sim: Simulation, agents: Collection[str] | None = None) -> list[tuple[ApiEntry, str]]:
         """``(entry, agent)`` of every subscription and service (the published entries are the core's
-        publications)."""
+        publications) of ``agents`` (None: of every agent)."""
         entries = [e for e in sim.api_entries() if e.direction != "publish"]
         return [(entry, agent) for agent, handle in sim.agents.items() for entry in entries
-                if handle.kind in entry.kinds]
+                if handle.kind in entry.kinds and (agents is None or agent in agents)]
 
     # ------------------------------------------------------------------ incoming
     def _on_message(self, entry: ApiEntry, agent: str) -> Any:

@@ -1,16 +1,18 @@
 """The standard ``simulation_interfaces`` (Jazzy 1.5) services and the ``simulate_steps`` action.
 
-Supported (and listed by get_simulator_features): entity tags in filters, entity state getting and setting,
-reset (state scope: time never goes back), simulation state getting and setting (stopped, playing, paused,
-quitting), single and multiple steps, the SimulateSteps action. Not supported: spawning and deleting (the
-services exist and answer RESULT_FEATURE_UNSUPPORTED), bounds filters, categories, named poses, worlds.
+Supported (and listed by get_simulator_features): entity filters by name, category, tags and bounds (box and
+sphere), entity information getting and setting (category, description, tags), entity bounds (an axis-aligned box
+in ``world``), named poses and their bounds, entity state getting and setting, reset (state scope: time never goes
+back), simulation state getting and setting (stopped, playing, paused, quitting), single and multiple steps, the
+SimulateSteps action with one feedback per step. Not supported: spawning and deleting (the services exist and
+answer RESULT_FEATURE_UNSUPPORTED), convex-hull bounds filters (FEATURE_UNSUPPORTED), spawnables, worlds. The
+read side (filters, information, bounds, named poses) is in ``siminfo.py``.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-import re
 import threading
 from typing import TYPE_CHECKING, Any
 
@@ -19,10 +21,15 @@ from simulation_interfaces.srv import (
     DeleteEntity,
     GetEntities,
     GetEntitiesStates,
+    GetEntityBounds,
+    GetEntityInfo,
     GetEntityState,
+    GetNamedPoseBounds,
+    GetNamedPoses,
     GetSimulationState,
     GetSimulatorFeatures,
     ResetSimulation,
+    SetEntityInfo,
     SetEntityState,
     SetSimulationState,
     SpawnEntity,
@@ -34,6 +41,7 @@ from sigcore.api.call import log_key
 from sigcore.text import clip, quote
 
 from .convert import finite, stamp
+from .siminfo import EntityQueries, Refusal
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -45,16 +53,19 @@ if TYPE_CHECKING:
 log = logging.getLogger("sigcore.ros2")
 
 F = SimulatorFeatures
-SUPPORTED = [F.ENTITY_TAGS, F.ENTITY_STATE_GETTING, F.ENTITY_STATE_SETTING, F.SIMULATION_RESET,
-             F.SIMULATION_RESET_STATE, F.SIMULATION_STATE_GETTING, F.SIMULATION_STATE_SETTING,
-             F.SIMULATION_STATE_PAUSE, F.STEP_SIMULATION_SINGLE, F.STEP_SIMULATION_MULTIPLE,
-             F.STEP_SIMULATION_ACTION]
+SUPPORTED = [F.NAMED_POSES, F.POSE_BOUNDS, F.ENTITY_TAGS, F.ENTITY_BOUNDS, F.ENTITY_BOUNDS_BOX,
+             F.ENTITY_CATEGORIES, F.ENTITY_STATE_GETTING, F.ENTITY_STATE_SETTING, F.ENTITY_INFO_GETTING,
+             F.ENTITY_INFO_SETTING, F.SIMULATION_RESET, F.SIMULATION_RESET_STATE, F.SIMULATION_STATE_GETTING,
+             F.SIMULATION_STATE_SETTING, F.SIMULATION_STATE_PAUSE, F.STEP_SIMULATION_SINGLE,
+             F.STEP_SIMULATION_MULTIPLE, F.STEP_SIMULATION_ACTION]
 """What get_simulator_features announces: only what is really implemented."""
 
 SERVICES = {
     "get_simulator_features": GetSimulatorFeatures, "get_entities": GetEntities,
     "get_entity_state": GetEntityState, "set_entity_state": SetEntityState,
-    "get_entities_states": GetEntitiesStates, "spawn_entity": SpawnEntity, "delete_entity": DeleteEntity,
+    "get_entities_states": GetEntitiesStates, "get_entity_info": GetEntityInfo, "set_entity_info": SetEntityInfo,
+    "get_entity_bounds": GetEntityBounds, "get_named_poses": GetNamedPoses,
+    "get_named_pose_bounds": GetNamedPoseBounds, "spawn_entity": SpawnEntity, "delete_entity": DeleteEntity,
     "get_simulation_state": GetSimulationState, "set_simulation_state": SetSimulationState,
     "reset_simulation": ResetSimulation, "step_simulation": StepSimulation,
 }
@@ -68,12 +79,25 @@ def _result(code: int, message: str = "") -> Result:
     return Result(result=code, error_message=message)
 
 
-class StepWaiter:
-    """Steps requested through step_simulation or simulate_steps, answered when reached."""
+FEEDBACK_DEPTH = 1000
+"""History of the simulate_steps feedback publisher (reliable): a client that keeps up gets every step's feedback."""
 
-    def __init__(self, target: int, done: Any) -> None:
+
+class StepWaiter:
+    """Steps requested through step_simulation or simulate_steps, answered when reached.
+
+    Args:
+        target: The step count at which the request is done.
+        steps: How many steps it asked for (they are the last ``steps`` before ``target``).
+        done: Called with the Result when the target step is reached or the request fails.
+        progress: Called with the number of its steps completed after each of them (simulate_steps' feedback).
+    """
+
+    def __init__(self, target: int, steps: int, done: Any, progress: Any = None) -> None:
         self.target = target
-        self.done = done  # called with the Result when the target step is reached or the request fails
+        self.steps = steps
+        self.done = done
+        self.progress = progress
 
 
 class SimInterfaces:
@@ -94,11 +118,12 @@ class SimInterfaces:
         self.on_reset = on_reset
         self.dt_ns = round(sim.dt * 1e9)
         self.names: dict[str, str] = {}
-        self._models = {a.name: a for a in sim.world.agents}
+        self.queries = EntityQueries(sim)
         for name, srv_type in SERVICES.items():
             full = f"{prefix}/{name}"
             srv = node.create_service(srv_type, full, lambda *_: None)
-            receiver.add_service(srv, self._bind(srv, getattr(self, f"_{name}")))
+            method = getattr(self, f"_{name}", None) or getattr(self.queries, name)
+            receiver.add_service(srv, self._bind(srv, method))
             self.names[full] = f"simulation_interfaces/srv/{srv_type.__name__}"
 
     def _bind(self, srv: Any, method: Any) -> Any:
@@ -106,6 +131,10 @@ class SimInterfaces:
             response = srv.srv_type.Response()
             try:
                 answered = method(request, response, lambda r: srv.send_response(r, header))
+            except Refusal as refusal:
+                response = srv.srv_type.Response()
+                response.result = refusal.result()
+                answered = False
             except Exception as e:  # a bug must not stop the simulation
                 kind = f"internal error {type(e).__name__}"
                 log.exception("%s failed", srv.srv_name, extra=log_key(srv.srv_name, kind))
@@ -136,6 +165,11 @@ class SimInterfaces:
     def on_step(self, sim: Simulation) -> None:
         """Answer step requests whose target step was reached."""
         if self.waiters:
+            for w in self.waiters:
+                if w.progress is not None:
+                    completed = sim.step_count - (w.target - w.steps)
+                    if 0 < completed <= w.steps:
+                        w.progress(completed)
             done = [w for w in self.waiters if sim.step_count >= w.target]
             if done:
                 self.waiters = [w for w in self.waiters if sim.step_count < w.target]
@@ -157,35 +191,9 @@ class SimInterfaces:
                                     "spawning/deleting unsupported; sig_ros API as <agent>_<suffix>")
         return False
 
-    def _filter(self, filters: Any, res: Any) -> list[str] | None:
-        if filters.bounds.type != 0 or len(filters.bounds.points):
-            res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED, "bounds filters are not supported")
-            return None
-        if len(filters.categories):
-            res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED, "entity categories are not supported")
-            return None
-        names = list(self.sim.entity_names)
-        if filters.filter:
-            try:
-                pattern = re.compile(filters.filter)
-            except re.error as e:
-                res.result = _result(Result.RESULT_OPERATION_FAILED, f"filter {quote(filters.filter)}: {e}")
-                return None
-            names = [n for n in names if pattern.search(n)]
-        tags = set(filters.tags.tags)
-        if tags:
-            mode_all = filters.tags.filter_mode == 1
-            def ok(n: str) -> bool:
-                have = set(getattr(self._models[n], "tags", ()))
-                return tags <= have if mode_all else bool(tags & have)
-            names = [n for n in names if ok(n)]
-        res.result = _result(Result.RESULT_OK)
-        return names
-
     def _get_entities(self, req: Any, res: Any, reply: Any) -> bool:
-        names = self._filter(req.filters, res)
-        if names is not None:
-            res.entities = names
+        res.entities = self.queries.select(req.filters)
+        res.result = _result(Result.RESULT_OK)
         return False
 
     def _entity_state(self, name: str) -> EntityState:
@@ -215,10 +223,10 @@ class SimInterfaces:
         return False
 
     def _get_entities_states(self, req: Any, res: Any, reply: Any) -> bool:
-        names = self._filter(req.filters, res)
-        if names is not None:
-            res.entities = names
-            res.states = [self._entity_state(n) for n in names]
+        names = self.queries.select(req.filters)
+        res.entities = names
+        res.states = [self._entity_state(n) for n in names]
+        res.result = _result(Result.RESULT_OK)
         return False
 
     def _set_entity_state(self, req: Any, res: Any, reply: Any) -> bool:
@@ -329,14 +337,15 @@ class SimInterfaces:
         self.add_steps(steps, lambda result: reply(StepSimulation.Response(result=result)))
         return True
 
-    def add_steps(self, steps: int, done: Any) -> StepWaiter:
-        """Queue ``steps`` steps (simulation paused); ``done(Result)`` is called when they are taken."""
+    def add_steps(self, steps: int, done: Any, progress: Any = None) -> StepWaiter:
+        """Queue ``steps`` steps (simulation paused); ``done(Result)`` is called when they are taken, and
+        ``progress(completed)`` after each of them."""
         c = self.sim.control
         if self.stopped:
             self.stopped = False
             c.paused = True
         c.pending_steps += steps
-        waiter = StepWaiter(self.sim.step_count + c.pending_steps, done)
+        waiter = StepWaiter(self.sim.step_count + c.pending_steps, steps, done, progress)
         self.waiters.append(waiter)
         return waiter
 
@@ -349,14 +358,17 @@ class SimInterfaces:
 
 
 class SimulateStepsAction:
-    """The ``simulate_steps`` action on its own small node and executor thread (feedback as steps are taken).
+    """The ``simulate_steps`` action on its own small node and executor thread.
 
-    The execute callback hands the request to the simulation thread through ``submit`` and waits for it.
+    The execute callback hands the request to the simulation thread through ``submit`` and waits for it. The
+    feedback is published on the simulation thread after each step of the goal, as the action definition says (one
+    small message per step, only while a goal runs); the feedback publisher keeps :data:`FEEDBACK_DEPTH` messages.
     """
 
     def __init__(self, node: Node, name: str, interfaces: SimInterfaces, submit: Any) -> None:
         from rclpy.action import ActionServer, CancelResponse, GoalResponse
         from rclpy.callback_groups import ReentrantCallbackGroup
+        from rclpy.qos import QoSProfile
         from simulation_interfaces.action import SimulateSteps
 
         self.interfaces = interfaces
@@ -366,12 +378,12 @@ class SimulateStepsAction:
         self.server = ActionServer(node, SimulateSteps, name, execute_callback=self._execute,
                                    goal_callback=lambda _g: GoalResponse.ACCEPT,
                                    cancel_callback=lambda _g: CancelResponse.ACCEPT,
-                                   callback_group=ReentrantCallbackGroup())
+                                   callback_group=ReentrantCallbackGroup(),
+                                   feedback_pub_qos_profile=QoSProfile(depth=FEEDBACK_DEPTH))
 
     def _execute(self, goal: Any) -> Any:
         action = self.SimulateSteps
         steps = int(goal.request.steps)
-        sim = self.interfaces.sim
         finished = threading.Event()
         outcome: dict[str, Any] = {}
 
@@ -387,7 +399,6 @@ class SimulateStepsAction:
                                             f"{steps} steps is too many (max {MAX_STEPS})")
                 finished.set()
                 return
-            outcome["start"] = sim.step_count
             if steps <= 0:
                 outcome["result"] = _result(Result.RESULT_OK)
                 finished.set()
@@ -397,7 +408,15 @@ class SimulateStepsAction:
                 outcome["result"] = result
                 finished.set()
 
-            outcome["waiter"] = i.add_steps(steps, done)
+            def progress(completed: int) -> None:
+                try:
+                    goal.publish_feedback(action.Feedback(completed_steps=completed,
+                                                          remaining_steps=steps - completed))
+                except Exception as e:  # the goal handle went away (shutdown): never stop the simulation
+                    log.warning("simulate_steps feedback failed: %s", clip(str(e), 200),
+                                extra=log_key("simulate_steps", f"feedback {type(e).__name__}"))
+
+            outcome["waiter"] = i.add_steps(steps, done, progress)
 
         self.submit(start)
         canceled = False
@@ -415,13 +434,6 @@ class SimulateStepsAction:
                     finished.set()
 
                 self.submit(cancel)
-            if "start" in outcome:
-                done_steps = min(steps, max(0, sim.step_count - outcome["start"]))
-                goal.publish_feedback(action.Feedback(completed_steps=done_steps,
-                                                      remaining_steps=steps - done_steps))
-        if "start" in outcome:  # a last feedback, also when the steps were taken within one wait
-            done_steps = min(steps, max(0, sim.step_count - outcome["start"]))
-            goal.publish_feedback(action.Feedback(completed_steps=done_steps, remaining_steps=steps - done_steps))
         result = outcome.get("result", _result(Result.RESULT_OPERATION_FAILED, "no result"))
         if canceled and result.error_message == "canceled":
             goal.canceled()

@@ -1,15 +1,18 @@
 """Idiomatic ROS 2 topics: /clock, /tf, and per robot cmd_vel, odom, joint_states, LaserScans.
 
-Frames (REP-105) are named by the core (:class:`sigcore.sim.frames.Frames`): with one robot, ``odom`` and the URDF's
-root link (e.g. ``base_link``); with several, each robot's frames are prefixed with ``<robot>/``. ``odom ->
-base_link`` (wheel odometry) is on /tf; the static part of the tree (``world -> odom``, fixed joints) is the core's
-``/tf_static`` publication.
+Frames (REP-105) are named and computed by the core (:class:`sigcore.sim.frames.Frames`): with one robot, ``odom``
+and the URDF's link names (e.g. ``base_link``); with several, each robot's frames are prefixed with ``<robot>/``;
+objects and humans by their names. On /tf, in one message per state publication with one stamp: ``odom ->
+base_link`` (wheel odometry), every movable joint, the root link of a free robot; in another, at
+``entity_tf_rate``, ``world -> <entity>`` of every object and human. The static part of the tree (``world ->
+odom``, fixed joints) is the core's ``/tf_static`` publication.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import time
 from typing import TYPE_CHECKING, Any
 
 from geometry_msgs.msg import TransformStamped, Twist
@@ -21,7 +24,9 @@ from tf2_msgs.msg import TFMessage
 from sigcore.agent.exceptions import ApiError
 from sigcore.agent.robot import RobotObj
 from sigcore.api.call import log_key
+from sigcore.sim.frames import WORLD
 from sigcore.sim.lidar import Scan
+from sigcore.sim.odometry_covariance import odometry_covariance
 from sigcore.text import clip
 from sigcore.transport import Endpoint
 
@@ -57,7 +62,14 @@ class StandardEndpoints:
         self.sim = sim
         self.dt_ns = round(sim.dt * 1e9)
         self.clock_every = 1 if config.clock_rate <= 0 else max(1, round(1.0 / (config.clock_rate * sim.dt)))
+        # the /clock policy: every clock_every steps but at most one per clock_gap [s] of wall time, except that a
+        # step whose state or scan is published always has its /clock first (docs/ros2.md, "The /clock policy")
+        self.clock_gap = 1.0 / config.clock_wall_limit if config.clock_wall_limit > 0 else 0.0
+        self._next_clock = 0.0
+        self.clock_step = -1
         self.state_every = max(1, round(1.0 / (config.state_rate * sim.dt)))
+        rate = config.entity_tf_rate
+        self.entity_every = 0 if rate <= 0 or not sim.frames.entities else max(1, round(1.0 / (rate * sim.dt)))
         self.clock_pub = node.create_publisher(Clock, "/clock", qos.clock())
         self._clock = CdrTemplate(Clock(), ["clock.sec", "clock.nanosec"])
         self.tf_pub = node.create_publisher(TFMessage, "/tf", qos.tf())
@@ -92,12 +104,18 @@ class StandardEndpoints:
         self._timed_out: set[str] = set()  # robots whose cmd_vel timeout was logged (once each)
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
         # the state messages, serialized once: each publication only rewrites their numbers
+        frames = sim.frames
         moving = [name for name in sim.odometry if name in self.odom_pub]
-        self._odom = [(sim.odometry[name], self.odom_pub[name], _odometry(self.prefix[name] + "odom", self.base[name]))
-                      for name in moving]
-        self._tf = _transforms([(self.prefix[name] + "odom", self.base[name]) for name in moving])
-        self._joint_states = [(name, joints, self.joint_pub[name], _joint_state(joints))
+        self._odom = [(sim.odometry[name], self.odom_pub[name],
+                       _odometry(self.prefix[name] + "odom", self.base[name], *self._covariance(name)),
+                       frames.root_mode(name) == "odom") for name in moving]
+        # one /tf message: odom -> root of each robot under its odometry, then each robot's joints (Frames.moving)
+        pairs = [(self.prefix[odo.robot] + "odom", self.base[odo.robot]) for odo, _, _, tf in self._odom if tf]
+        pairs += [pair for name in self.joints for pair in frames.moving(name)]
+        self._tf = _transforms(pairs) if pairs else None
+        self._joint_states = [(name, joints, self.joint_pub[name], _joint_state(joints), bool(frames.moving(name)))
                               for name, joints in self.joints.items()]
+        self._entity_tf = _transforms([(WORLD, e) for e in frames.entities]) if self.entity_every else None
         sim.scan_observers.append(self._scan)
 
     @staticmethod
@@ -105,7 +123,8 @@ class StandardEndpoints:
         """Every topic the constructor creates, with the world element that brought its name in, without creating
         any."""
         out = [Endpoint("/clock", "rosgraph_msgs/msg/Clock", "topic", "the transport's clock"),
-               Endpoint("/tf", "tf2_msgs/msg/TFMessage", "topic", "the transport's odometry transforms", shared=True)]
+               Endpoint("/tf", "tf2_msgs/msg/TFMessage", "topic",
+                        "the transport's odometry, joint and entity transforms", shared=True)]
         for name, handle in sim.agents.items():
             if isinstance(handle, RobotObj):
                 out.append(Endpoint(f"/{name}/joint_states", "sensor_msgs/msg/JointState", "topic",
@@ -121,6 +140,14 @@ class StandardEndpoints:
                                 f"the scans of <lidar name='{lidar.model.name}'> of robot '{lidar.robot}'",
                                 lidar.robot, f"lidar:{lidar.model.name}", "lidar"))
         return out
+
+    def _covariance(self, robot: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """The pose and twist covariance diagonals of ``robot``'s odometry, from its world file's ``<drive>`` and the
+        odometry's noise (:mod:`sigcore.sim.odometry_covariance`)."""
+        drive = self.sim.robot_model(robot).drive
+        assert drive is not None
+        return odometry_covariance(drive.radius, drive.separation, drive.max_wheel_velocity,
+                                   self.sim.odometry[robot].noise)
 
     # ------------------------------------------------------------------ incoming
     def _cmd_vel(self, robot: RobotObj) -> Any:
@@ -157,65 +184,111 @@ class StandardEndpoints:
     def on_step(self, sim: Simulation) -> None:
         """Publish /clock (every ``clock_every`` steps) and the robot states (every ``state_every`` steps)."""
         n = sim.step_count
-        if n % self.clock_every == 0:
-            self.clock_pub.publish(self._clock.pack(*divmod(n * self.dt_ns, 1_000_000_000)))
         if n % self.state_every == 0:
-            self.publish_state()
+            if self.clock_step != n:  # a stamped state message never runs ahead of /clock
+                self.publish_clock()
+            self.publish_state(entities=False)
+        elif n % self.clock_every == 0 and (self.clock_gap <= 0 or time.monotonic() >= self._next_clock):
+            self.publish_clock()
+        if self.entity_every and n % self.entity_every == 0:
+            if self.clock_behind:  # the /clock policy: never ahead of /clock
+                self.publish_clock()
+            self.publish_entities()
         if self._cmd_vel_deadline:
             self._stop_stale_cmd_vel(n)
 
     def publish_clock(self) -> None:
-        """Publish the current time now (e.g. at start and after a reset)."""
-        self.clock_pub.publish(self._clock.pack(*divmod(self.sim.step_count * self.dt_ns, 1_000_000_000)))
+        """Publish the current time now (at start, after a reset, when the simulation goes idle, and by the /clock
+        policy of :meth:`on_step`)."""
+        n = self.sim.step_count
+        self.clock_pub.publish(self._clock.pack(*divmod(n * self.dt_ns, 1_000_000_000)))
+        self.clock_step = n
+        if self.clock_gap > 0:
+            self._next_clock = time.monotonic() + self.clock_gap
 
-    def publish_state(self) -> None:
-        """odom -> base_link on /tf, odom and joint_states of every robot, stamped with the current step.
+    @property
+    def clock_behind(self) -> bool:
+        """Whether the last step's time is not on /clock yet (the wall-time limit skipped it)."""
+        return self.clock_step != self.sim.step_count
+
+    def publish_state(self, entities: bool = True) -> None:
+        """odom and joint_states of every robot, and their transforms on /tf (odom -> base_link, every movable
+        joint, free roots) in one message, stamped with the current step.
 
         The messages are serialized templates (:class:`CdrTemplate`) in which only the stamp, the pose, the
-        velocities and the joint values are rewritten.
+        velocities and the joint values are rewritten; the joint transforms are computed by the core
+        (:meth:`sigcore.sim.frames.Frames.transforms`) from the positions published in joint_states.
+
+        Args:
+            entities: Also the entity transforms (:meth:`publish_entities`; at start and after a reset, while
+                :meth:`on_step` publishes them at their own rate).
         """
         sim = self.sim
         sec, nanosec = divmod(sim.step_count * self.dt_ns, 1_000_000_000)
         poses: list[float] = []
-        for odo, pub, template in self._odom:
+        for odo, pub, template, tf in self._odom:
             s = odo.state
             qz, qw = math.sin(s.yaw / 2), math.cos(s.yaw / 2)
             pub.publish(template.pack(sec, nanosec, s.x, s.y, qz, qw, s.v, s.w))
-            poses += (sec, nanosec, s.x, s.y, qz, qw)
-        if poses:
+            if tf:
+                poses += (sec, nanosec, s.x, s.y, 0.0, 0.0, 0.0, qz, qw)
+        backend, transforms = sim.backend, sim.frames.transforms
+        for name, joints, pub, template, moving in self._joint_states:
+            positions = [backend.get_joint_angle(name, j) for j in joints]
+            pub.publish(template.pack(sec, nanosec, *positions, *[backend.get_joint_velocity(name, j) for j in joints]))
+            if moving:
+                for _, _, (x, y, z), (w, qx, qy, qz) in transforms(name, positions):
+                    poses += (sec, nanosec, x, y, z, qx, qy, qz, w)
+        if self._tf is not None:
             self.tf_pub.publish(self._tf.pack(*poses))
-        backend = sim.backend
-        for name, joints, pub, template in self._joint_states:
-            pub.publish(template.pack(sec, nanosec, *[backend.get_joint_angle(name, j) for j in joints],
-                                      *[backend.get_joint_velocity(name, j) for j in joints]))
+        if entities and self._entity_tf is not None:
+            self.publish_entities()
+
+    def publish_entities(self) -> None:
+        """``world -> <entity>`` of every object and human on /tf, stamped with the current step (if
+        ``entity_tf_rate`` is not 0)."""
+        if self._entity_tf is None:
+            return
+        sec, nanosec = divmod(self.sim.step_count * self.dt_ns, 1_000_000_000)
+        values: list[float] = []
+        for _, _, (x, y, z), (w, qx, qy, qz) in self.sim.frames.entity_transforms():
+            values += (sec, nanosec, x, y, z, qx, qy, qz, w)
+        self.tf_pub.publish(self._entity_tf.pack(*values))
 
     def _scan(self, scan: Scan) -> None:
         pub = self.scan_pub.get((scan.robot, scan.lidar))
         if pub is not None:
+            if self.clock_behind:  # the /clock policy: a scan never runs ahead of /clock
+                self.publish_clock()
             stamp = round(scan.stamp / self.sim.dt) * self.dt_ns
             pub.publish(fill_message(LaserScan(), scan.fields(self.sim.frames.name(scan.robot, scan.frame), stamp)))
 
 
-def _odometry(frame: str, child: str) -> CdrTemplate:
-    """Odometry ``frame -> child`` filled with: stamp (sec, nanosec), position x, y [m], orientation z, w,
-    linear x [m/s], angular z [rad/s] (every other number 0)."""
+def _odometry(frame: str, child: str, pose: tuple[float, ...], twist: tuple[float, ...]) -> CdrTemplate:
+    """Odometry ``frame -> child`` with the pose and twist covariance diagonals ``pose`` and ``twist`` (fixed),
+    filled with: stamp (sec, nanosec), position x, y [m], orientation z, w, linear x [m/s], angular z [rad/s]
+    (every other number 0)."""
     msg = Odometry()
     msg.header.frame_id, msg.child_frame_id = frame, child
+    for i in range(6):
+        msg.pose.covariance[7 * i], msg.twist.covariance[7 * i] = pose[i], twist[i]
     return CdrTemplate(msg, ["header.stamp.sec", "header.stamp.nanosec", "pose.pose.position.x",
                              "pose.pose.position.y", "pose.pose.orientation.z", "pose.pose.orientation.w",
                              "twist.twist.linear.x", "twist.twist.angular.z"])
 
 
 def _transforms(frames: list[tuple[str, str]]) -> CdrTemplate:
-    """TFMessage of planar transforms ``parent -> child``, each filled with: stamp (sec, nanosec), translation
-    x, y [m], rotation z, w (every other number 0)."""
+    """TFMessage of transforms ``parent -> child``, each filled with: stamp (sec, nanosec), translation x, y, z [m],
+    rotation x, y, z, w."""
     msg = TFMessage(transforms=[TransformStamped() for _ in frames])
     fields = []
     for i, (tf, (parent, child)) in enumerate(zip(msg.transforms, frames, strict=True)):
         tf.header.frame_id, tf.child_frame_id = parent, child
         fields += [f"transforms.{i}.{name}" for name in ("header.stamp.sec", "header.stamp.nanosec",
                                                           "transform.translation.x", "transform.translation.y",
-                                                          "transform.rotation.z", "transform.rotation.w")]
+                                                          "transform.translation.z", "transform.rotation.x",
+                                                          "transform.rotation.y", "transform.rotation.z",
+                                                          "transform.rotation.w")]
     return CdrTemplate(msg, fields)
 
 

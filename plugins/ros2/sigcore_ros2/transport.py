@@ -16,10 +16,11 @@ from typing import TYPE_CHECKING, Any
 
 from sigcore.api.call import log_key
 from sigcore.text import clip
-from sigcore.transport import Endpoint, Transport, publication_endpoints
+from sigcore.transport import Endpoint, Transport, TransportError, publication_endpoints
 
-from .config import Ros2Config, config_for
+from .config import Ros2Config, config_for, sigros_agents
 from .logfilter import OncePerKind
+from .rosargs import RosArgs, parse_ros_args, validate_settings
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
@@ -65,10 +66,61 @@ class Ros2Transport(Transport):
         self._context: Any = None
         self._filter = OncePerKind()
         self._idle_clock = 0.0
+        self._args = RosArgs()
         self.endpoints: dict[str, str] = {}
         """Every endpoint created, name -> ROS type (after :meth:`start`)."""
 
     # ------------------------------------------------------------------ Transport
+    def configure(self, args: list[str]) -> None:
+        """Take ``--ros-args``: remappings and ``--log-level`` for rcl (``--log-level`` also sets the Python
+        ``sigcore`` loggers), ``-p NAME:=VALUE`` for the settings (:mod:`sigcore_ros2.rosargs`).
+
+        Raises:
+            TransportError: an argument is unknown or invalid (naming it and what is valid).
+        """
+        self._args = parse_ros_args(args)
+        if self._args.log_level is not None:
+            logging.getLogger("sigcore").setLevel(self._args.log_level)
+
+    def settings(self, sim: Simulation) -> Ros2Config:
+        """The settings for ``sim``: the constructor's, else the world's ``<plugin name="ros2">``, with the
+        ``--ros-args -p`` parameters applied.
+
+        Raises:
+            TransportError: a parameter's value is invalid for this world (e.g. ``sigros_agents`` names no agent).
+        """
+        config = self._config or config_for(sim)
+        params = {k: v for k, v in self._args.params.items() if k != "use_sim_time"}
+        if params:
+            config = validate_settings(params, config)
+            why = sigros_agents(sim.world, config.sigros_agents)[1]
+            if why is not None:
+                raise TransportError(f"-p sigros_agents:={self._args.params.get('sigros_agents')}: {why}")
+        return config
+
+    def matched(self, topic: str) -> tuple[int, str]:
+        """Matched subscriptions of a topic the transport publishes, or matched publishers of one it subscribes
+        to (``topic`` as planned; remappings are applied).
+
+        Raises:
+            TransportError: before :meth:`start`, or ``topic`` is none of the transport's topics.
+        """
+        if self._context is None:
+            raise TransportError("the ROS 2 transport has not started: no peers to count")
+        node = self._node
+        try:
+            resolved = node.resolve_topic_name(topic)
+        except Exception as e:  # rclpy's name errors
+            raise TransportError(f"'{topic}' is not a valid topic name: {e}") from None
+        pubs = [p for p in node.publishers if p.topic_name == resolved]
+        subs = [s for s in node.subscriptions if s.topic_name == resolved]
+        # the node's own endpoints match each other (its use_sim_time subscription to /clock): not counted
+        if pubs:
+            return max(p.get_subscription_count() for p in pubs) - len(subs), "subscriber"
+        if subs:
+            return max(s.get_publisher_count() for s in subs), "publisher"
+        raise TransportError(f"'{topic}' ({resolved}) is none of the transport's topics")
+
     def plan(self, sim: Simulation) -> list[Endpoint]:
         """Every endpoint :meth:`start` creates for ``sim``, with who asked for it, without ROS: the agents'
         subscriptions and services, the declared publications, the idiomatic topics, simulation_interfaces,
@@ -77,14 +129,15 @@ class Ros2Transport(Transport):
         from .siminterfaces import SERVICES
         from .standard import StandardEndpoints
 
-        config = self._config or config_for(sim)
+        config = self.settings(sim)
+        agents = sigros_agents(sim.world, config.sigros_agents)[0]
         out: list[Endpoint] = []
         if config.sigros:
             out += [Endpoint(entry.name_for(agent), entry.ros_type,
                              "service" if entry.direction == "service" else "topic",
                              f"'{entry.suffix}' of {sim.agents[agent].kind} '{agent}'", agent, "name")
-                    for entry, agent in SigRosEndpoints.plan(sim)]
-        out += publication_endpoints(sim, agents=config.sigros)
+                    for entry, agent in SigRosEndpoints.plan(sim, agents)]
+        out += publication_endpoints(sim, agents=agents if config.sigros else False)
         if config.standard:
             out += StandardEndpoints.plan(sim)
         prefix = config.sim_prefix
@@ -129,7 +182,9 @@ class Ros2Transport(Transport):
         from .standard import StandardEndpoints
 
         self._sim = sim
-        config = self._config or config_for(sim)
+        config = self.settings(sim)
+        agents = sigros_agents(sim.world, config.sigros_agents)[0]
+        node_name = self._node_name = self._args.node_name or self._node_name
         # the receiver thread wakes on a request and needs the GIL the simulation thread holds: hand it over
         # within 0.1 ms instead of Python's default 5 ms (restored in stop)
         self._switch = sys.getswitchinterval()
@@ -137,24 +192,25 @@ class Ros2Transport(Transport):
         for name in ("sigcore.api", "sigcore.ros2"):
             logging.getLogger(name).addFilter(self._filter)
         self._context = Context()
-        rclpy.init(context=self._context, args=[])
-        node = rclpy.create_node(self._node_name, context=self._context, parameter_overrides=sim_time_overrides())
+        rclpy.init(context=self._context, args=self._args.rcl)  # remappings and log levels of --ros-args
+        node = rclpy.create_node(node_name, context=self._context, parameter_overrides=sim_time_overrides())
         self._node = node
         qos = Qos(config.qos)
         receiver = Receiver(self._context)
         self._receiver = receiver
         # the node's own parameter and type description services, answered between steps like the others
         self.node_services = NodeServices(node, receiver, lambda: sim.stamp_ns)
-        self.sigros = SigRosEndpoints(sim, node, receiver, qos) if config.sigros else None
+        self.sigros = SigRosEndpoints(sim, node, receiver, qos, agents) if config.sigros else None
         self.standard = StandardEndpoints(sim, node, receiver, qos, config) if config.standard else None
         self.interfaces = SimInterfaces(sim, node, receiver, config.sim_prefix, self._after_reset)
         # everything the core and the features declare (the agents' published topics, /tf_static, /map, ...)
-        self.publications = PublicationEndpoints(node, qos, agent_topics=config.sigros)
+        self.publications = PublicationEndpoints(node, qos, agent_topics=agents if config.sigros else False,
+                                                 before=self._clock_first)
         sim.publications.connect(self.publications)
         self.endpoints = {**(self.sigros.names if self.sigros else {}), **self.publications.names,
                           **(self.standard.topics if self.standard else {}), **self.interfaces.names}
         # the action server on its own node and executor (it needs rclpy's waitable machinery)
-        self._action_node = rclpy.create_node(f"{self._node_name}_actions", context=self._context)
+        self._action_node = rclpy.create_node(f"{node_name}_actions", context=self._context)
         guard_node(self._action_node)  # its parameter services run on the executor: never let them raise
         self.action = SimulateStepsAction(self._action_node, f"{config.sim_prefix}/simulate_steps",
                                           self.interfaces, self._submit)
@@ -181,11 +237,14 @@ class Ros2Transport(Transport):
         """Run the queued callbacks; while paused (``timeout`` > 0, no steps pending) wait for one first."""
         receiver = self._receiver
         if timeout > 0 and self._sim is not None and self._sim.control.pending_steps <= 0:
+            standard = self.standard
+            if standard is not None and standard.clock_behind:
+                standard.publish_clock()  # paused: the last step's time at once (the wall-time limit may skip it)
             receiver.wait(timeout)
             now = time.monotonic()
-            if self.standard is not None and now - self._idle_clock >= PAUSED_CLOCK_PERIOD:
+            if standard is not None and now - self._idle_clock >= PAUSED_CLOCK_PERIOD:
                 self._idle_clock = now  # paused: repeat the (unchanged) time for nodes that join late
-                self.standard.publish_clock()
+                standard.publish_clock()
         if receiver.pending:
             receiver.drain()
         self._filter.summary(log)
@@ -202,6 +261,8 @@ class Ros2Transport(Transport):
             if not self.publications.flush(FLUSH_TIMEOUT):
                 log.warning("some subscribers did not acknowledge the last messages within %g s", FLUSH_TIMEOUT)
             self._receiver.drain()
+            if self.standard is not None and self.standard.clock_behind:
+                self.standard.publish_clock()  # the final time
             self.interfaces.fail_waiters("the simulation stopped")
             if self.sigros is not None:
                 self.sigros.refuse_held("the simulation stopped")
@@ -247,9 +308,17 @@ class Ros2Transport(Transport):
         if self.standard is not None:
             self.standard.on_step(sim)
         if self.interfaces.waiters:
+            if self.standard is not None and self.standard.clock_behind:
+                self.standard.publish_clock()  # a client stepping in lockstep sees the time of each step first
             self.interfaces.on_step(sim)
         if self.sigros is not None and self.sigros.held:
             self.sigros.poll_held()
+
+    def _clock_first(self) -> None:
+        """Put the current step's time on /clock before a declared publication goes out (the /clock policy: the
+        core's and the features' stamped messages, e.g. SLAM's transforms, never run ahead of /clock)."""
+        if self.standard is not None and self.standard.clock_behind:
+            self.standard.publish_clock()
 
     def _after_reset(self) -> None:
         if self.standard is not None:
