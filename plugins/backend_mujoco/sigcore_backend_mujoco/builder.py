@@ -217,7 +217,7 @@ def _add_motor(spec: mujoco.MjSpec, robot: str, joint: JointPlan) -> None:
 def _add_urdf_object(spec: mujoco.MjSpec, world: World, obj: Object) -> EntityPlan:
     assert obj.urdf is not None
     what = f"object '{obj.name}'"
-    loaded = load_urdf(_document(world, obj.name, what), what)
+    loaded = load_urdf(_document(world, obj.name, what), what, obj.scale)
     root = _attach(spec, loaded.spec, obj.name, obj.pose, free=not obj.static)
     _style(root, loaded.friction, obj.friction, obj.color)
     _exclude_self(spec, root)

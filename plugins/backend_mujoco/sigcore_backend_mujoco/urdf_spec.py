@@ -43,12 +43,14 @@ class LoadedUrdf:
     friction: dict[str, float]
 
 
-def load_urdf(urdf: UrdfDocument, what: str) -> LoadedUrdf:
+def load_urdf(urdf: UrdfDocument, what: str, scale: float = 1.0) -> LoadedUrdf:
     """Turn the parsed URDF ``urdf`` into a MuJoCo spec (it works on a copy; ``urdf`` is not changed).
 
     Args:
         urdf: The URDF document (``World.urdf``).
         what: The entity it belongs to, for messages, e.g. ``"robot 'robot_000'"``.
+        scale: Every length of the model multiplied by this (an object's ``scale``, as PyBullet's
+            ``globalScaling``): origins, primitive sizes, mesh scales, prismatic limits; inertia by its square.
 
     Raises:
         BackendError: missing collision mesh, a root link called ``world``, or a URDF MuJoCo rejects.
@@ -66,6 +68,8 @@ def load_urdf(urdf: UrdfDocument, what: str) -> LoadedUrdf:
             raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
                                f"(relative paths are relative to the URDF's directory {path.parent})")
         mesh.set("filename", str(resolved))
+    if scale != 1.0:
+        _scale(root, scale)
     friction = link_friction(root)
     links = [str(e.get("name")) for e in root.findall("link")]
     children = {str(c.get("link")) for c in root.iter("child")}
@@ -90,6 +94,33 @@ def load_urdf(urdf: UrdfDocument, what: str) -> LoadedUrdf:
 
 
 
+
+
+_LENGTHS = {"origin": ("xyz",), "box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",)}
+
+
+def _scale(root: etree._Element, s: float) -> None:
+    """Multiply every length of the parsed URDF ``root`` by ``s`` (in place, on the loader's copy)."""
+
+    def times(text: str, factor: float) -> str:
+        return " ".join(repr(float(v) * factor) for v in text.split())
+
+    for element in root.iter("origin", "box", "cylinder", "sphere"):
+        for attribute in _LENGTHS[str(element.tag)]:
+            if element.get(attribute) is not None:
+                element.set(attribute, times(str(element.get(attribute)), s))
+    for mesh in root.iter("mesh"):
+        mesh.set("scale", times(str(mesh.get("scale", "1 1 1")), s))
+    for inertia in root.iter("inertia"):
+        for attribute in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+            if inertia.get(attribute) is not None:
+                inertia.set(attribute, times(str(inertia.get(attribute)), s * s))
+    for joint in root.iter("joint"):
+        limit = joint.find("limit")
+        if joint.get("type") == "prismatic" and limit is not None:
+            for attribute in ("lower", "upper"):
+                if limit.get(attribute) is not None:
+                    limit.set(attribute, times(str(limit.get(attribute)), s))
 
 
 def _first_line(error: Exception) -> str:
