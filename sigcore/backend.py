@@ -14,6 +14,7 @@ Conventions, for every method:
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from typing import ClassVar
 
 import numpy as np
@@ -54,6 +55,40 @@ class Backend(ABC):
     def reset(self) -> None:
         """Restore every body and joint to its state right after :meth:`build`; release all grasps; restore
         gravity, dynamics and collision modes and masses. Time is the core's business and is not touched."""
+
+    # ------------------------------------------------------------------ run-time changes
+    def add_entities(self, world: World, names: Sequence[str]) -> None:
+        """Add the entities ``names`` of ``world`` to the running world, in one go (MuJoCo: one recompile).
+
+        ``world`` is the running world with them appended to ``world.agents`` (the core has validated them: names
+        unique, files readable); every other entity is as before. After the call:
+
+        * every existing body and joint has exactly the state it had (positions, velocities, actuator and servo
+          states, held entities, grasps, gravity/dynamics/collision modes, masses, moved static objects);
+        * each new entity stands at its model ``pose`` at rest, its joints at 0 held by their servos (its drive
+          wheels braked), with welds to every gripper that may grasp it (and its grippers' welds to graspable
+          objects) as :meth:`build` makes them;
+        * :meth:`parts`, :meth:`joints`, :meth:`contacts`, :meth:`part_of` and :meth:`ray_cast` include it;
+          part ids may be renumbered (the core reads :meth:`contacts` afresh);
+        * :meth:`reset` restores it to this state (as added).
+
+        Raises:
+            BackendError: an entity cannot be built (naming it); the running world is then unchanged. The default
+                implementation refuses: a backend that cannot add entities while running.
+        """
+        raise BackendRefusal(f"backend '{self.name}' cannot add entities to a running world")
+
+    def remove_entities(self, world: World, names: Sequence[str]) -> None:
+        """Remove the entities ``names`` from the running world (``world``: the world without them).
+
+        The core has released every grasp that involves them (:meth:`detach`). Every other body keeps its state;
+        those that rested on a removed entity fall. :meth:`parts` & co. no longer know the removed names, and
+        :meth:`reset` no longer restores them.
+
+        Raises:
+            BackendError: the backend cannot remove them (the default implementation refuses).
+        """
+        raise BackendRefusal(f"backend '{self.name}' cannot remove entities from a running world")
 
     # ------------------------------------------------------------------ introspection
     @abstractmethod

@@ -469,6 +469,30 @@ def plugins_cmd() -> None:
         out.print("no plugins installed (pip install sigcore-backend-mujoco)")
 
 
+@app.command(name="spawnables")
+def spawnables_cmd(
+    world_file: Annotated[Path | None, typer.Argument(exists=True, dir_okay=False, help="world XML file (its "
+                                                       "models/ folder counts too)")] = None,
+) -> None:
+    """List the models a spawn request may name as model://NAME: name, origin, description."""
+    from .world.models import World
+    from .world.spawnables import find_spawnables
+
+    try:
+        world = parse_world(world_file) if world_file is not None else World()
+    except WorldError as e:
+        raise _fail([str(i) for i in e.issues]) from None
+    found = find_spawnables(world)
+    table = Table(title="spawnables (model://NAME)")
+    for col in ("name", "origin", "description"):
+        table.add_column(col)
+    for s in found:  # cells as Text: names and descriptions are never read as markup
+        table.add_row(Text(s.name), Text(s.origin), Text(s.description))
+    out.print(table)
+    if not found:
+        out.print("no spawnables (folders of worlds/models with a spawnable.xml, or a plugin's)")
+
+
 def main() -> None:
     """Console-script entry point. Arguments after ``--ros-args`` (up to an optional ``--``) are the transport's
     (``sigcore run`` only), taken out before typer parses the rest."""

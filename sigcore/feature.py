@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict
 if TYPE_CHECKING:
     from .api.table import ApiEntry
     from .sim.simulation import Simulation
+    from .sim.spawn import EntityChange
 
 
 class FeatureConfig(BaseModel):
@@ -78,6 +79,12 @@ class Feature(ABC):
     def outcome(self) -> bool | None:
         """Whether the world's task succeeded, for the exit code of ``sigcore run`` (1 if any feature says False);
         ``None``: no verdict (the default, or the task has not ended)."""
+        return None
+
+    def entities_changed(self, change: EntityChange) -> None:
+        """Entities were added or removed while running (spawned, deleted): ``change.added`` are in
+        ``sim.agents`` and the backend now, ``change.removed`` are gone. Called on the simulation thread between
+        steps, after the core's own state was updated; the default does nothing."""
         return None
 
     def reset(self) -> None:

@@ -76,6 +76,15 @@ def quat_to_matrix(q: Array) -> Array:
     ])
 
 
+def quat_to_rpy(q: Array) -> tuple[float, float, float]:
+    """Roll, pitch, yaw [rad] (fixed axes x, y, z, as URDF ``rpy``) of a unit quaternion (w, x, y, z)."""
+    w, x, y, z = (float(v) for v in q)
+    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return roll, pitch, yaw
+
+
 def quat_yaw(q: Array) -> float:
     """Heading [rad] about z of a unit quaternion."""
     w, x, y, z = q

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from .backend import Backend
     from .feature import Feature
     from .sim.simulation import Simulation
+    from .sim.spawn import Spawnable
     from .transport import Transport
     from .world.models import World
 
@@ -71,6 +72,19 @@ def sigcore_register_controllers(register: Callable[[str, type[Controller]], Non
 
     The class must subclass :class:`sigcore.agent.Controller`. A world attaches one with
     ``controller="cleanup.moderator"``; prefix names with the plugin's name to avoid clashes.
+    """
+
+
+@hookspec
+def sigcore_register_spawnables(register: Callable[[Spawnable], None]) -> None:
+    """Register spawnable models: call ``register(Spawnable(name, description, element, base))`` for each.
+
+    A spawn request names one as ``model://NAME``; ``get_spawnables`` and ``sigcore spawnables`` list them with
+    the folders of ``worlds/models`` (:mod:`sigcore.world.spawnables`). ``element`` is one world-format
+    ``<robot>``, ``<object>`` or ``<human>``, its relative paths starting at ``base`` (e.g. the plugin's package
+    folder); ``origin`` is set to the plugin's name. A name the plugin registers twice disables the plugin; a name
+    another plugin registered first is ignored with a warning naming both; an element that does not validate is
+    left out of the list with a warning.
     """
 
 

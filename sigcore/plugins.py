@@ -1,4 +1,4 @@
-"""Plugin discovery and the registries of backends, transports, features and controllers.
+"""Plugin discovery and the registries of backends, transports, features, controllers and spawnables.
 
 A plugin is a module (or any object) with ``@sigcore.hookimpl`` functions named after
 :mod:`sigcore.hookspecs`. Installed plugins are found through entry points of group ``sigcore`` by
@@ -29,13 +29,14 @@ from .isolation import USER_ERRORS, describe
 if TYPE_CHECKING:
     from .backend import Backend
     from .feature import Feature
+    from .sim.spawn import Spawnable
     from .transport import Transport
 
 GROUP = "sigcore"
 """Entry-point group that plugin distributions declare."""
 DISABLE_ENV = "SIGCORE_DISABLE_PLUGIN_AUTOLOAD"
 """If set (non-empty), entry points are not loaded; plugins can still be added by :func:`register_plugin`."""
-KINDS = ("backend", "transport", "feature", "controller")
+KINDS = ("backend", "transport", "feature", "controller", "spawnable")
 """What a plugin can register, in the order :attr:`PluginInfo.provides` lists them."""
 _HOOKS = {kind: f"sigcore_register_{kind}s" for kind in KINDS}
 _SPECS = sorted(name for name in vars(hookspecs) if name.startswith("sigcore_"))
@@ -56,8 +57,8 @@ class PluginInfo:
         version: That distribution's version; ``""`` in-process.
         error: Why the plugin is disabled (where it failed, ``Type: message``), or ``None`` if it loaded.
         module: The entry point's target (``package`` or ``package.module:attr``) or the object's module.
-        provides: Names in effect by kind (``backend``, ``transport``, ``feature``, ``controller``); a name
-            that another plugin registered first is left out (a warning names both).
+        provides: Names in effect by kind (``backend``, ``transport``, ``feature``, ``controller``,
+            ``spawnable``); a name that another plugin registered first is left out (a warning names both).
     """
 
     name: str
@@ -258,7 +259,7 @@ def _scan(rec: _Record, plugin: object) -> str | None:
     rec.found = {}
     for kind, hook_name in _HOOKS.items():
         found: list[tuple[str, Any]] = []
-        kwargs = {"register": _registrar(kind, found)}
+        kwargs = {"register": _registrar(kind, found, rec.name)}
         for impl in getattr(pm.hook, hook_name).get_hookimpls():
             if impl.plugin is not plugin:
                 continue
@@ -272,8 +273,8 @@ def _scan(rec: _Record, plugin: object) -> str | None:
     return None
 
 
-def _registrar(kind: str, found: list[tuple[str, Any]]) -> Callable[..., None]:
-    """The ``register`` callback handed to one plugin's hook: it validates what it gets."""
+def _registrar(kind: str, found: list[tuple[str, Any]], plugin: str) -> Callable[..., None]:
+    """The ``register`` callback handed to plugin ``plugin``'s hook: it validates what it gets."""
     from .agent.controller import Controller
     from .backend import Backend
     from .feature import Feature
@@ -281,6 +282,8 @@ def _registrar(kind: str, found: list[tuple[str, Any]]) -> Callable[..., None]:
 
     bases: dict[str, type] = {"backend": Backend, "transport": Transport, "feature": Feature,
                               "controller": Controller}
+    if kind == "spawnable":
+        return _spawnable_registrar(found, plugin)
     base = bases[kind]
 
     def check(name: object, cls: object) -> None:
@@ -300,6 +303,25 @@ def _registrar(kind: str, found: list[tuple[str, Any]]) -> Callable[..., None]:
 
     def register(cls: type) -> None:
         check(getattr(cls, "name", None), cls)
+    return register
+
+
+def _spawnable_registrar(found: list[tuple[str, Any]], plugin: str) -> Callable[[Spawnable], None]:
+    """``register(Spawnable)``: a valid name, not registered twice by this plugin; its origin becomes ``plugin``."""
+    from dataclasses import replace
+
+    from .sim.spawn import Spawnable
+    from .world.models import valid_name
+
+    def register(spawnable: Spawnable) -> None:
+        if not isinstance(spawnable, Spawnable):
+            raise TypeError(f"spawnable {spawnable!r} is not a sigcore.sim.spawn.Spawnable")
+        if not valid_name(spawnable.name):
+            raise ValueError(f"spawnable name {spawnable.name!r} is invalid; valid: a letter, then letters, "
+                             "digits or '_'")
+        if any(name == spawnable.name for name, _ in found):
+            raise ValueError(f"spawnable '{spawnable.name}' is registered twice by plugin '{plugin}'")
+        found.append((spawnable.name, replace(spawnable, origin=plugin)))
     return register
 
 
@@ -383,6 +405,12 @@ def features() -> dict[str, type[Feature]]:
 def controllers() -> dict[str, type[Any]]:
     """Registered controller classes by short name (a world attaches one with ``controller="name"``)."""
     return dict(_registry("controller"))
+
+
+def spawnables() -> dict[str, Spawnable]:
+    """Spawnables registered by plugins, by name (``model://NAME``; :mod:`sigcore.world.spawnables` adds the
+    folders of ``worlds/models``). Each one's ``origin`` is the plugin's name."""
+    return dict(_registry("spawnable"))
 
 
 def get_backend(name: str) -> type[Backend]:

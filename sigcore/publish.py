@@ -105,6 +105,9 @@ class PublicationSink(ABC):
     def publish(self, publication: Publication, stamp_ns: int, value: dict[str, Any]) -> None:
         """Deliver one value stamped ``stamp_ns`` [ns of simulated time]. Called on the simulation thread."""
 
+    def withdraw(self, publication: Publication) -> None:  # noqa: B027 - optional, does nothing by default
+        """Remove the endpoint of ``publication`` (its agent was deleted while running); default: nothing."""
+
 
 class Publisher:
     """The handle a declarer pushes values through (returned by :meth:`Publications.declare`)."""
@@ -159,6 +162,16 @@ class Publications:
         for sink in list(self._sinks):
             self._call(sink, "declare", sink.declare, publication)
         return Publisher(self, publication)
+
+    def withdraw(self, topic: str) -> None:
+        """Forget the publication ``topic`` (its agent was deleted while running): every sink removes its endpoint,
+        its latched value is dropped, and pushing through its publisher is an error. Unknown topics are ignored."""
+        publication = self._declared.pop(topic, None)
+        if publication is None:
+            return
+        self._latched.pop(topic, None)
+        for sink in list(self._sinks):
+            self._call(sink, "withdraw", sink.withdraw, publication)
 
     @property
     def declared(self) -> list[Publication]:

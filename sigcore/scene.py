@@ -17,7 +17,7 @@ The ROS 2 side (``/sigcore/scene`` markers) is published by the core from this d
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -182,6 +182,21 @@ class Scene:
                                        for link in urdf.links}
         self._observers: list[Callable[[Scene], None]] = []
         self._unmeasured: set[Path] = set()
+
+    def add(self, world: World, entities: Iterable[Entity], frame: FrameName) -> None:
+        """Entities spawned while running (then :meth:`changed`)."""
+        for e in entities:
+            self.entities[e.name] = entity_scene(world, e, frame)
+            if isinstance(e, Robot):
+                urdf = world.urdf(e.name).model
+                self._parts[e.name] = {frame(e.name, link): (None if link == urdf.root else link)
+                                       for link in urdf.links}
+
+    def remove(self, names: Iterable[str]) -> None:
+        """Entities deleted while running (then :meth:`changed`)."""
+        for name in names:
+            self.entities.pop(name, None)
+            self._parts.pop(name, None)
 
     def add_observer(self, observer: Callable[[Scene], None]) -> None:
         """Call ``observer(scene)`` after every :meth:`changed` (e.g. to republish ``/sigcore/scene``)."""

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
+from sigcore import plugins
 from sigcore.sim import Simulation
 from sigcore.world import World, parse_world
 
@@ -23,3 +25,13 @@ def core_world() -> World:
 def sim(core_world: World) -> Simulation:
     """A fresh simulation of the core world on MuJoCo."""
     return Simulation(core_world, "mujoco")
+
+
+@pytest.fixture
+def fresh_plugins(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """The plugin registry starts empty (the next lookup rediscovers the installed plugins) and forgets the
+    in-process plugins the test registered."""
+    monkeypatch.delenv(plugins.DISABLE_ENV, raising=False)
+    plugins.reset_for_tests()
+    yield
+    plugins.reset_for_tests()

@@ -45,12 +45,9 @@ def stub_backend(name: str) -> type[Backend]:
 
 
 @pytest.fixture(autouse=True)
-def fresh_registry(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+def fresh_registry(fresh_plugins: None) -> Iterator[None]:
     """Every test starts with no plugin loaded, and leaves the next lookup to rediscover the real ones."""
-    monkeypatch.delenv(plugins.DISABLE_ENV, raising=False)
-    plugins.reset_for_tests()
     yield
-    plugins.reset_for_tests()
     for name in [m for m in sys.modules if m.startswith(FAKE_PREFIX)]:
         del sys.modules[name]
 

@@ -159,6 +159,16 @@ class ContactTracker:
         started.sort()
         return started
 
+    def set_agents(self, agents: Iterable[str], rolling: Mapping[str, frozenset[str]]) -> None:
+        """The agents changed while running (spawned, deleted): the backend's part ids may be renumbered, so the
+        contacts are read afresh at the next look; episodes of the agents that remain go on."""
+        self._agents = frozenset(agents)
+        self._rolling = {robot: frozenset(parts) for robot, parts in rolling.items()}
+        self._quiet = frozenset((robot, part, GROUND) for robot, parts in self._rolling.items() for part in parts)
+        self._step = -1
+        self._pairs = frozenset()
+        self._apart = {t: s for t, s in self._apart.items() if t[0] in self._agents and t[2] in self._agents | {GROUND}}
+
     def reset(self) -> None:
         """Forget every contact and close every episode (after the backend was reset): contacts present after the
         next step start new episodes."""

@@ -143,15 +143,33 @@ class DescriptionTopics:
     """
 
     def __init__(self, sim: Simulation) -> None:
+        self._sim = sim
+        self._topics: dict[str, list[str]] = {}
+        """robot -> its robot_description topics."""
         for topic, robot in description_topics(sim.world).items():
-            text = robot_description(sim.world, robot, sim.frames.prefix(robot))
-            pub = sim.publications.declare(Publication(
-                topic, "std_msgs/msg/String", "latched",
-                f"the URDF of robot '{robot}' (file:// meshes, link names = TF frames)", agent=""))
-            pub.publish({"data": text})
+            self._declare(robot, topic)
         self._scene: Publisher = sim.publications.declare(SCENE)
         sim.scene.add_observer(self.publish_scene)
         self.publish_scene(sim.scene)
+
+    def _declare(self, robot: str, topic: str) -> None:
+        sim = self._sim
+        text = robot_description(sim.world, robot, sim.frames.prefix(robot))
+        pub = sim.publications.declare(Publication(
+            topic, "std_msgs/msg/String", "latched",
+            f"the URDF of robot '{robot}' (file:// meshes, link names = TF frames)", agent=""))
+        pub.publish({"data": text})
+        self._topics.setdefault(robot, []).append(topic)
+
+    def add(self, robot: str, namespace: str = "") -> None:
+        """A robot spawned while running: ``<namespace>/<robot>/robot_description`` (never the world's
+        ``/robot_description``, which stays the first robot's)."""
+        self._declare(robot, f"{namespace}/{robot}/robot_description")
+
+    def remove(self, robot: str) -> None:
+        """A robot deleted while running: its topics are withdrawn."""
+        for topic in self._topics.pop(robot, []):
+            self._sim.publications.withdraw(topic)
 
     def publish_scene(self, scene: Scene) -> None:
         """Push ``scene`` as markers on ``/sigcore/scene``."""

@@ -102,6 +102,13 @@ class Dispatcher:
         if "on_recv_msg" in callbacks:
             self.message_listeners[name] = controller
 
+    def remove(self, agent: str) -> None:
+        """Detach the controller of ``agent`` (deleted while running); nothing if it has none."""
+        self._controllers.pop(agent, None)
+        self.collision_listeners.pop(agent, None)
+        self.message_listeners.pop(agent, None)
+        self._init = [name for name in self._init if name != agent]
+
     def controller(self, agent: str) -> Controller | None:
         """The agent's controller, or None if it was disabled."""
         entry = self._controllers.get(agent)

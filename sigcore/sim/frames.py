@@ -102,18 +102,70 @@ class Frames:
         self._entities = tuple(a.name for a in sim.world.agents if a.kind in ("object", "human"))
         self._check_entity_names(robots)
         for robot in robots:
-            model = sim.robot_model(robot)
-            self._mode[robot] = "fixed" if model.fixed else "odom" if model.drive is not None else "free"
-            if self._mode[robot] != "free":
-                pos, quat = sim.backend.get_pose(robot)
-                if self._mode[robot] == "fixed":
-                    self.set_static(WORLD, self.name(robot, sim.urdf(robot).root), pos, quat)
-                else:
-                    self.set_static(WORLD, self.name(robot, "odom"), (pos[0], pos[1], 0.0),
-                                    planar_quaternion(quat_yaw(quat)))
-            self._moving[robot] = self._robot_tree(robot)
+            self._add_robot(robot)
         self._publisher = sim.publications.declare(TF_STATIC)
         self.publish()
+
+    def _add_robot(self, robot: str) -> None:
+        sim = self._sim
+        model = sim.robot_model(robot)
+        self._mode[robot] = "fixed" if model.fixed else "odom" if model.drive is not None else "free"
+        if self._mode[robot] != "free":
+            pos, quat = sim.backend.get_pose(robot)
+            if self._mode[robot] == "fixed":
+                self.set_static(WORLD, self.name(robot, sim.urdf(robot).root), pos, quat)
+            else:
+                self.set_static(WORLD, self.name(robot, "odom"), (pos[0], pos[1], 0.0),
+                                planar_quaternion(quat_yaw(quat)))
+        self._moving[robot] = self._robot_tree(robot)
+
+    # ------------------------------------------------------------------ run-time changes
+    def taken(self) -> dict[str, str]:
+        """Every frame name in use -> what it is (for refusing an entity that would reuse one)."""
+        taken = {WORLD: "the root frame of the TF tree"}
+        for robot in self._prefix:
+            for link in self._sim.urdf(robot).links:
+                taken.setdefault(self.name(robot, link), f"the frame of link '{link}' of robot '{robot}'")
+            taken.setdefault(self.name(robot, "odom"), f"the odometry frame of robot '{robot}'")
+            taken.setdefault(self.name(robot, "map"), f"the map frame of robot '{robot}' (SLAM)")
+        for entity in self._entities:
+            taken.setdefault(entity, f"the frame of entity '{entity}'")
+        return taken
+
+    def spawn_prefix(self, robot: str) -> str:
+        """The prefix a robot spawned now gets: ``""`` when no robot exists, else ``"<robot>/"`` (the frames of
+        robots already running are never renamed)."""
+        return "" if not self._prefix else f"{robot}/"
+
+    def add(self, entities: Sequence[tuple[str, str]]) -> None:
+        """Entities spawned while running, ``(name, kind)``: a robot's tree (prefix :meth:`spawn_prefix`, static
+        part republished), an object's or human's frame. The simulation has checked names against
+        :meth:`taken`."""
+        publisher, self._publisher = self._publisher, None  # publish the static tree once, at the end
+        try:
+            for name, kind in entities:
+                if kind == "robot":
+                    self._prefix[name] = self.spawn_prefix(name)
+                    self._add_robot(name)
+                else:
+                    self._entities = (*self._entities, name)
+        finally:
+            self._publisher = publisher
+        self._republish()
+
+    def remove(self, names: Sequence[str]) -> None:
+        """Entities deleted while running: their frames leave the tree (static part republished)."""
+        gone = set(names)
+        for robot in [r for r in self._prefix if r in gone]:
+            mine = {self.name(robot, link) for link in self._sim.urdf(robot).links} | {
+                self.name(robot, "odom"), self.name(robot, "map")}
+            for child in [c for c in self._static if c in mine]:
+                self._static.pop(child)
+            del self._prefix[robot]
+            self._mode.pop(robot, None)
+            self._moving.pop(robot, None)
+        self._entities = tuple(e for e in self._entities if e not in gone)
+        self._republish()
 
     def _check_entity_names(self, robots: list[str]) -> None:
         """``WorldError`` at the name of each object or human whose frame name a robot's frame already has."""

@@ -111,8 +111,19 @@ class EntityInfos:
         wanted = set(categories)
         return [n for n, i in self._infos.items() if i.category in wanted]
 
+    def add(self, entities: Iterable[Entity]) -> None:
+        """Entities spawned while running: their information as given (what a reset restores for them)."""
+        for e in entities:
+            self._initial[e.name] = self._infos[e.name] = EntityInfo(category_of(e), e.description, tuple(e.tags))
+
+    def remove(self, names: Iterable[str]) -> None:
+        """Entities deleted while running."""
+        for name in names:
+            self._initial.pop(name, None)
+            self._infos.pop(name, None)
+
     def reset(self) -> None:
-        """Back to the world file's values."""
+        """Back to the world file's values (spawned entities: their values as spawned)."""
         self._infos = dict(self._initial)
 
 

@@ -53,6 +53,18 @@ class Modes:
         setter(entity, enabled)
         self._modes[entity][mode] = bool(enabled)
 
+    def add(self, entities: Iterable[Robot | Object | Human]) -> None:
+        """Entities spawned while running, with the modes their model gives (what a reset restores for them)."""
+        for e in entities:
+            self._initial[e.name] = {"gravity": True, "dynamics": not getattr(e, "static", False), "collision": True}
+            self._modes[e.name] = dict(self._initial[e.name])
+
+    def remove(self, names: Iterable[str]) -> None:
+        """Entities deleted while running."""
+        for name in names:
+            self._initial.pop(name, None)
+            self._modes.pop(name, None)
+
     def reset(self) -> None:
         """Back to the world file's modes (the backend's reset restores its side)."""
         self._modes = {name: dict(m) for name, m in self._initial.items()}

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Collection
+
 
 class Owners:
     """``(entity, part) -> owner`` as set through the API; cleared by a reset."""
@@ -16,6 +18,10 @@ class Owners:
     def get(self, entity: str, part: str = "main") -> str | None:
         """The owner of ``entity``'s ``part``, or None."""
         return self._owner.get((entity, part))
+
+    def forget(self, entities: Collection[str]) -> None:
+        """Forget the owners of parts of ``entities`` and those that ``entities`` were (deleted while running)."""
+        self._owner = {k: v for k, v in self._owner.items() if k[0] not in entities and v not in entities}
 
     def clear(self) -> None:
         """Forget every owner (a reset)."""

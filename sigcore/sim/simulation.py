@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+import shutil
+import tempfile
+import weakref
+from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -16,14 +20,14 @@ from ..agent.handle import SimObj
 from ..agent.robot import RobotObj
 from ..api.sources import Source
 from ..api.table import ApiEntry, api_table
-from ..backend import Array, Backend
+from ..backend import Array, Backend, BackendError
 from ..feature import Feature
 from ..isolation import USER_ERRORS, describe
 from ..publish import Publication, Publications, Publisher
 from ..scene import Scene
 from ..text import quote
 from ..world.exceptions import WorldError, WorldIssue
-from ..world.models import Object, Robot, World
+from ..world.models import Entity, Object, Robot, World
 from ..world.urdf import UrdfModel
 from .contacts import ContactTracker, rolling_parts
 from .control import RunControl
@@ -39,6 +43,17 @@ from .lidar import LidarSensor, Scan
 from .modes import Mode, Modes
 from .odometry import WheelOdometry
 from .owners import Owners
+from .spawn import (
+    EntityChange,
+    Spawnable,
+    SpawnRefusal,
+    SpawnRequest,
+    build_model,
+    check_pose,
+    normalize_namespace,
+    resource_element,
+    unique_name,
+)
 
 log = logging.getLogger("sigcore")
 
@@ -104,11 +119,20 @@ class Simulation:
         self._dt_ns = round(self.dt * 1e9)
         self.publications = Publications(lambda: self.step_count * self._dt_ns, self._attach_sources)
         self._sources: list[tuple[Source, dict[str, Publisher], str | None]] = []  # (source, publishers, feature)
+        self._source_slots: dict[tuple[str, str], tuple[Source, dict[str, Publisher], str | None]] = {}
+        self._sources_attached = False
+        self._agent_topics: dict[str, list[str]] = {}  # agent -> the topics declared for it (withdrawn on delete)
         self.frames = Frames(self)
         self.scene = Scene(world, self.backend, self.frames.name)
         """Every entity's visual geometry and bounds (``sigcore.scene``); ``robot_description`` and
         ``/sigcore/scene`` are published from it."""
-        DescriptionTopics(self)
+        self.description = DescriptionTopics(self)
+        self.spawned: dict[str, str] = {}
+        """Entities added while running -> their namespace (``""`` or ``/ns``); ``sigcore.sim.spawn``."""
+        self.entity_observers: list[Callable[[EntityChange], None]] = []
+        """Called after every spawn and delete, once the core's state is consistent (transports, viewers)."""
+        self._initial_world = world
+        self._spawn_dir: Path | None = None
         self._attach_controllers(controllers or {})
         self.features: dict[str, Feature] = {}
         self.feature_guard = FeatureGuard()
@@ -198,29 +222,247 @@ class Simulation:
         added)."""
         return {id(o): o for attr in OBSERVER_LISTS for o in getattr(self, attr)}, set(self.services)
 
-    def _declare_agent_publications(self) -> None:
-        """One publication per agent for every ``publish`` entry of the API table (the core's and the features')."""
+    def _declare_agent_publications(self, agents: Iterable[str] | None = None) -> None:
+        """One publication per agent (of ``agents``, default all) for every ``publish`` entry of the API table (the
+        core's and the features'); an agent spawned with a namespace has its topics under it."""
         owners = {id(e): name for name, entries in self._feature_entries.items() for e in entries}
         for entry in self.api_entries():
             if entry.direction != "publish" or entry.source is None:
                 continue
-            publishers = {}
-            for agent, handle in self.agents.items():
+            key = (entry.origin, entry.suffix)
+            slot = self._source_slots.get(key)
+            publishers: dict[str, Publisher] = slot[1] if slot is not None else {}
+            for agent in (self.agents if agents is None else agents):
+                handle = self.agents[agent]
                 if handle.kind in entry.kinds and entry.source.has(self, agent):
+                    namespace = self.spawned.get(agent, "")
+                    topic = f"{namespace}/{entry.name_for(agent)}" if namespace else entry.name_for(agent)
                     publishers[agent] = self.publications.declare(Publication(
-                        entry.name_for(agent), entry.ros_type, entry.qos, entry.doc, entry.origin, agent,
-                        entry.request))
-            if publishers:
-                self._sources.append((entry.source, publishers, owners.get(id(entry))))
+                        topic, entry.ros_type, entry.qos, entry.doc, entry.origin, agent, entry.request))
+                    self._agent_topics.setdefault(agent, []).append(topic)
+            if publishers and slot is None:
+                slot = (entry.source, publishers, owners.get(id(entry)))
+                self._source_slots[key] = slot
+                self._sources.append(slot)
+                if self._sources_attached:
+                    self._attach_source(*slot)
 
     def _attach_sources(self) -> None:
         """Attach the sources of the agents' publications (when the first sink connects); the observers that a
         feature's source attaches are that feature's."""
+        self._sources_attached = True
         for source, publishers, feature in self._sources:
-            before = self._attached()[0]
-            source.attach(self, publishers)
-            if feature is not None:
-                self.feature_guard.adopt(feature, [o for i, o in self._attached()[0].items() if i not in before], ())
+            self._attach_source(source, publishers, feature)
+
+    def _attach_source(self, source: Source, publishers: dict[str, Publisher], feature: str | None) -> None:
+        before = self._attached()[0]
+        source.attach(self, publishers)
+        if feature is not None:
+            self.feature_guard.adopt(feature, [o for i, o in self._attached()[0].items() if i not in before], ())
+
+    # ------------------------------------------------------------------ run-time changes (sigcore.sim.spawn)
+    def namespace(self, agent: str) -> str:
+        """The ROS namespace of ``agent``'s endpoints: ``""`` for the world file's, ``/ns`` for one spawned with
+        a namespace."""
+        return self.spawned.get(agent, "")
+
+    def spawnables(self) -> list[Spawnable]:
+        """What ``model://NAME`` may name (``sigcore.world.spawnables``)."""
+        from ..world.spawnables import find_spawnables
+
+        return find_spawnables(self.world)
+
+    def _spawnable(self, name: str) -> Spawnable:
+        from ..world.spawnables import spawnable
+
+        return spawnable(self.world, name)
+
+    def spawn(self, requests: Sequence[SpawnRequest]) -> list[str | SpawnRefusal]:
+        """Add entities while running (between steps): each request is resolved and validated like a world file's
+        element; the valid ones are added in one backend call.
+
+        Returns:
+            Per request, the name the entity got, or the :class:`SpawnRefusal` saying why it was not added (a
+            backend failure refuses every request of the call: nothing is added then).
+        """
+        results: list[str | SpawnRefusal] = []
+        models: list[Entity] = []
+        namespaces: dict[str, str] = {}
+        taken: dict[str, str] = {**self.frames.taken(), **{a: f"agent '{a}'" for a in self.agents}}
+        for request in requests:
+            try:
+                model, namespace = self._resolve(request, taken)
+            except SpawnRefusal as refusal:
+                results.append(refusal)
+                continue
+            taken[model.name] = "an entity of the same request"
+            models.append(model)
+            namespaces[model.name] = namespace
+            results.append(model.name)
+        if models:
+            try:
+                self.add_entities(models, namespaces)
+            except SpawnRefusal as refusal:
+                results = [refusal if isinstance(r, str) else r for r in results]
+        return results
+
+    def _resolve(self, request: SpawnRequest, taken: dict[str, str]) -> tuple[Entity, str]:
+        namespace = normalize_namespace(request.namespace)
+        xyz, wxyz = check_pose(request.xyz, request.wxyz)
+        frame = request.frame.strip()
+        if frame not in ("", "world"):
+            if frame not in self.entity_names:
+                raise SpawnRefusal("INVALID_POSE", f"pose frame '{frame[:80]}' is unknown; valid: 'world' (or empty) "
+                                                   f"or an entity: {', '.join(self.entity_names)}")
+            from ..geometry import quat_mul, quat_rotate
+
+            pos, quat = self.backend.get_pose(frame)
+            xyz, wxyz = pos + quat_rotate(quat, xyz), quat_mul(quat, wxyz)
+        if self._spawn_dir is None:  # URDF texts of requests, removed with the simulation
+            self._spawn_dir = Path(tempfile.mkdtemp(prefix="sigcore-spawn-"))
+            weakref.finalize(self, shutil.rmtree, self._spawn_dir, True)
+        element, base, default = resource_element(request, self.world, self._spawn_dir, self._spawnable)
+        wanted = request.name.strip() or str(element.get("name", "")).strip() or default
+        name = unique_name(wanted, taken, request.allow_renaming)
+        model = build_model(self.world, element, base, name, (xyz, wxyz), request.tags)
+        return model, namespace
+
+    def add_entities(self, models: Sequence[Entity], namespaces: dict[str, str] | None = None) -> list[str]:
+        """Add validated entity models while running (between steps), in one backend call: every owner of
+        per-entity state learns of them, their controllers are created (``on_init`` called at once when the run
+        has started), features and :attr:`entity_observers` are told.
+
+        Raises:
+            SpawnRefusal: a name is taken or names a TF frame in use (NAME_NOT_UNIQUE), a controller cannot be
+                created (RESOURCE_PARSE_ERROR), the backend failed (OPERATION_FAILED); nothing changed then.
+        """
+        namespaces = namespaces or {}
+        taken = {**self.frames.taken(), **{a: f"agent '{a}'" for a in self.agents}}
+        names = [m.name for m in models]
+        for model in models:
+            if model.name in taken or names.count(model.name) > 1:
+                raise SpawnRefusal("NAME_NOT_UNIQUE", f"name '{model.name}' is taken "
+                                                      f"({taken.get(model.name, 'twice in this request')})")
+        registered = plugins.controllers()
+        controllers: dict[str, Controller] = {}
+        for model in models:
+            if model.controller is None:
+                continue
+            try:
+                controllers[model.name] = resolve_controller(model.controller, registered)()
+            except USER_ERRORS as e:  # ControllerError, or its constructor raised
+                raise SpawnRefusal("RESOURCE_PARSE_ERROR", f"controller '{model.controller}' of '{model.name}' "
+                                                           f"cannot be created: {e}") from None
+        world = self.world.with_agents(self.world.agents + tuple(models))
+        try:
+            self.backend.add_entities(world, names)
+        except BackendError as e:
+            raise SpawnRefusal("OPERATION_FAILED", f"the backend could not add {', '.join(names)}: {e}") from None
+        self.world = world
+        for model in models:
+            self._models[model.name] = model
+            self.entity_names.append(model.name)
+            self.spawned[model.name] = namespaces.get(model.name, "")
+            self.agents[model.name] = (RobotObj if isinstance(model, Robot) else SimObj)(self, model.name, model.kind)
+            if isinstance(model, Robot):
+                self._urdfs[model.name] = world.urdf(model.name).model
+                if model.drive is not None:
+                    self._drives[model.name] = DriveState(model.name, model.drive)
+                self.lidars.extend(LidarSensor(model.name, lidar, self.dt, self.world.seed + len(self.lidars) + i)
+                                   for i, lidar in enumerate(model.lidars))
+            if isinstance(model, Object) and model.graspable:
+                self.graspable.append(model.name)
+        self.info.add(models)
+        self._modes.add(models)
+        self._refresh_contacts()
+        self.frames.add([(m.name, m.kind) for m in models])
+        self.scene.add(world, models, self.frames.name)
+        for model in models:
+            if isinstance(model, Robot):
+                self.description.add(model.name, self.spawned[model.name])
+        self._declare_agent_publications(names)
+        for name, controller in controllers.items():
+            self.dispatch.add(self.agents[name], controller)
+        if self._started:
+            self.dispatch.init(self.time)
+        log.info("spawned %s at t=%.3f s", ", ".join(f"{m.kind} '{m.name}'" for m in models), self.time)
+        self._changed(EntityChange(added=tuple(names)))
+        return names
+
+    def delete(self, names: Sequence[str]) -> None:
+        """Remove entities while running (between steps): grasps that involve them are released first, their
+        controllers, endpoints, frames and scene entries go; entities that rested on them fall.
+
+        Raises:
+            SpawnRefusal: NOT_FOUND (no such entity; lists them), OPERATION_FAILED (a feature's ``<plugin>``
+                names it, or the backend failed); nothing changed then.
+        """
+        names = list(dict.fromkeys(names))
+        for name in names:
+            if name not in self.entity_names:
+                raise SpawnRefusal("NOT_FOUND", f"no entity {quote(name)} to delete; entities: "
+                                                f"{', '.join(self.entity_names) or 'none'}")
+            for cfg in self.world.plugins:
+                if name in " ".join(cfg.config.values()).split():
+                    raise SpawnRefusal("OPERATION_FAILED", f"'{name}' is named by <plugin name=\"{cfg.name}\"> "
+                                                           "of the world file; it cannot be deleted while that "
+                                                           "feature runs")
+        gone = set(names)
+        for robot, part, obj in self.grasps.items():
+            if robot in gone or obj in gone:
+                self.grasps.release(robot, part)
+                self.backend.detach(robot, part, obj)
+        world = self.world.with_agents(tuple(a for a in self.world.agents if a.name not in gone))
+        try:
+            self.backend.remove_entities(world, names)
+        except BackendError as e:
+            raise SpawnRefusal("OPERATION_FAILED", f"the backend could not remove {', '.join(names)}: {e}") from None
+        self.frames.remove(names)
+        self.scene.remove(names)
+        for name in names:
+            if self._models[name].kind == "robot":
+                self.description.remove(name)
+            for topic in self._agent_topics.pop(name, []):
+                self.publications.withdraw(topic)
+            for _, publishers, _ in self._sources:
+                publishers.pop(name, None)
+            self.dispatch.remove(name)
+            del self.agents[name]
+            del self._models[name]
+            self.entity_names.remove(name)
+            self.spawned.pop(name, None)
+            self._urdfs.pop(name, None)
+            self._drives.pop(name, None)
+            self.odometry.pop(name, None)
+            if name in self.graspable:
+                self.graspable.remove(name)
+        self.world = world
+        self.lidars = [lidar for lidar in self.lidars if lidar.robot not in gone]
+        self.info.remove(names)
+        self._modes.remove(names)
+        self.owners.forget(gone)
+        self._wrench = {k: v for k, v in self._wrench.items() if k[0] not in gone}
+        self._outbox = [m for m in self._outbox if m.to not in gone]
+        self._refresh_contacts()
+        log.info("deleted %s at t=%.3f s", ", ".join(repr(n) for n in names), self.time)
+        self._changed(EntityChange(removed=tuple(names)))
+
+    def _refresh_contacts(self) -> None:
+        robots = {a.name: a for a in self.world.agents if isinstance(a, Robot)}
+        self._contacts.set_agents([a.name for a in self.world.agents],
+                                  {name: rolling_parts(r, self._urdfs[name]) for name, r in robots.items()})
+
+    def _changed(self, change: EntityChange) -> None:
+        """Tell the scene's observers, the features and the entity observers (in that order)."""
+        self.scene.changed()
+        for name, feature in list(self.features.items()):
+            if name not in self.feature_guard.disabled:
+                try:
+                    feature.entities_changed(change)
+                except USER_ERRORS as e:
+                    self.disable_feature(name, "entities_changed", e)
+        for observer in list(self.entity_observers):
+            observer(change)
 
     # ------------------------------------------------------------------ lookups used by handles and the API
     @property
@@ -447,9 +689,23 @@ class Simulation:
                     if not self._contain(observer, e, "step observer"):
                         raise
 
-    def reset(self) -> None:
+    def reset(self, despawn: bool = True) -> None:
         """Restore the world's initial state; time goes on forward. Grasps, forces and queued messages are
-        dropped, modes return to the world file's."""
+        dropped, modes return to the world file's.
+
+        Args:
+            despawn: Also delete every entity spawned while running and bring back the world file's entities that
+                were deleted (at their world-file pose, with new controllers), as simulation_interfaces' full
+                reset does; False: only restore states (spawned entities go back to their state as spawned).
+        """
+        if despawn:
+            if self.spawned:
+                self.delete(list(self.spawned))
+            missing = [e for e in self._initial_world.entities if e.name not in self.entity_names]
+            if missing:
+                self.add_entities(missing)
+                for model in missing:
+                    self.spawned.pop(model.name, None)
         self.backend.reset()
         self.grasps.clear()
         self.owners.clear()

@@ -466,6 +466,14 @@ class World(_Model):
             raise KeyError(f"agent '{what}' has no URDF; agents with one: {', '.join(with_urdf) or 'none'}")
         return self._urdfs.get(self.resolve(agent.urdf))
 
+    def with_agents(self, agents: tuple[AgentModel, ...]) -> World:
+        """This world with ``agents`` instead of its own (spawning and deleting while running): the same file,
+        locations and shared URDF documents; the agents are not validated again (the caller has)."""
+        copy = self.model_copy(update={"agents": tuple(agents)})
+        copy._locations = self._locations
+        copy._urdfs = self._urdfs
+        return copy
+
     def share_urdfs(self, files: UrdfFiles) -> None:
         """Use the URDF documents ``files`` already read (the parser calls this, so files are read once)."""
         self._urdfs = files

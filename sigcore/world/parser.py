@@ -287,6 +287,13 @@ def _check_files(reader: _Reader, element: etree._Element, base: Path,
             if broken is not None:
                 reader.issue(element, attr, f"invalid URDF: {broken}")
                 continue
+            floating = [j.name for j in urdf.joints if j.type == "floating"]
+            if floating:
+                reader.issue(element, attr, f"unsupported URDF: joint '{floating[0]}' of {file} is floating, which "
+                                            "the backends cannot simulate inside a model (MuJoCo refuses it, "
+                                            "PyBullet makes it fixed); valid joint types: revolute, continuous, "
+                                            "prismatic, fixed, planar")
+                continue
             if element.tag == "robot":
                 _check_robot(reader, urdf, raw.strip(), children)
 

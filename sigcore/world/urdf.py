@@ -196,9 +196,11 @@ def _names(path: Path, root: etree._Element) -> UrdfModel:
     for e in root.findall("joint"):
         parent, child = e.find("parent"), e.find("child")
         jtype = e.get("type", "")
-        if jtype not in JOINT_TYPES or parent is None or child is None:
-            raise UrdfError(path, e.sourceline or 0,
-                            f"joint '{e.get('name')}' needs type in {JOINT_TYPES}, <parent> and <child>")
+        if jtype not in JOINT_TYPES:
+            raise UrdfError(path, e.sourceline or 0, f"joint '{e.get('name')}' has type '{jtype}', which sigcore "
+                                                     f"does not support; valid: {', '.join(JOINT_TYPES)}")
+        if parent is None or child is None:
+            raise UrdfError(path, e.sourceline or 0, f"joint '{e.get('name')}' needs <parent> and <child>")
         limit = e.find("limit")
         lower = upper = None
         if limit is not None and jtype in ("revolute", "prismatic"):

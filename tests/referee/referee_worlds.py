@@ -29,11 +29,11 @@ ROBOT = f"""
 MODERATOR = '\n  <agent name="moderator_0"/>'
 
 
-def make_sim(tmp_path: Path, body: str, attributes: str = 'rules="cleanup"') -> Simulation:
-    """A MuJoCo simulation of a world with ``<plugin name="referee" ATTRIBUTES/>`` and ``body``."""
+def make_sim(tmp_path: Path, body: str, attributes: str = 'rules="cleanup"', backend: str = "mujoco") -> Simulation:
+    """A simulation (MuJoCo unless told) of a world with ``<plugin name="referee" ATTRIBUTES/>`` and ``body``."""
     path = tmp_path / "world.xml"
     path.write_text(f'<world name="t" timestep="0.002">\n  <plugin name="referee" {attributes}/>{body}\n</world>\n')
-    return Simulation(parse_world(path), "mujoco")
+    return Simulation(parse_world(path), backend)
 
 
 def run_for(sim: Simulation, seconds: float) -> None:

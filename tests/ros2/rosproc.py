@@ -14,6 +14,13 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import pytest
+    from sigcore_ros2.transport import Ros2Transport
+
+    from sigcore.sim import Simulation
 
 HERE = Path(__file__).parent
 CLIENTS = HERE / "clients"
@@ -108,3 +115,23 @@ def wait_until(predicate: object, timeout: float = 10.0) -> bool:
             return True
         time.sleep(0.05)
     return False
+
+
+def start_in_process(monkeypatch: pytest.MonkeyPatch,
+                     world: Path) -> tuple[Simulation, Ros2Transport, dict[str, str]]:
+    """A paused simulation of ``world`` (MuJoCo) with the ROS 2 transport started in this process, in the test's
+    own ROS domain (``monkeypatch`` sets it here): ``(sim, transport, environment for client processes)``; the
+    caller stops the transport."""
+    from sigcore_ros2.transport import Ros2Transport
+
+    from sigcore.sim import Simulation
+    from sigcore.world import parse_world
+
+    env = ros_env()
+    for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
+        monkeypatch.setenv(key, env[key])
+    sim = Simulation(parse_world(world), "mujoco")
+    sim.control.paused = True
+    transport = Ros2Transport()
+    transport.start(sim)
+    return sim, transport, env

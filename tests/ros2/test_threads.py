@@ -15,24 +15,14 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
-from rosproc import CLIENTS, WORLD, ros_env  # noqa: E402
-from sigcore_ros2.transport import Ros2Transport  # noqa: E402
-
-from sigcore.sim.simulation import Simulation  # noqa: E402
-from sigcore.world import parse_world  # noqa: E402
+from rosproc import CLIENTS, WORLD, start_in_process  # noqa: E402
 
 
 def test_a_raising_executor_callback_is_logged_once_and_the_executor_serves_on(
         monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
     """Two requests whose callback raises: one ERROR naming the node and the exception, none of the thread's
     end; the action node's and the main node's parameter services answer afterwards."""
-    env = ros_env()
-    for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
-        monkeypatch.setenv(key, env[key])
-    sim = Simulation(parse_world(WORLD), "mujoco")
-    sim.control.paused = True
-    transport = Ros2Transport()
-    transport.start(sim)
+    sim, transport, env = start_in_process(monkeypatch, WORLD)
 
     def boom(request: Any, response: Any) -> Any:
         raise KeyError("planted by the test")

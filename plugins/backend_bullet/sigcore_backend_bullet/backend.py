@@ -23,6 +23,13 @@ number of simulations live in one process. Techniques (each checked by ``tests/b
   limit (an exact, torque-limited velocity motor, a brake at 0).
 * **Reset:** ``restoreState`` of a state saved after build (poses, velocities, joint states), then grasps
   removed, masses, collision filters, motors and modes restored.
+* **Adding and removing while running:** new entities are created in the running client by the builder's code
+  (:func:`.builder.build_entity`), removed ones with ``removeBody`` (which also removes their constraints);
+  nothing else is touched, so the other bodies move exactly as in a world that never had them, as long as
+  nothing touches the new ones (checked by
+  ``tests/backends/test_conformance_spawn.py``). PyBullet reuses the ids of removed bodies, and leaves their
+  collision-filter pair entries behind: :mod:`.pairs` keeps every entry consistent. Part ids are renumbered in
+  world order. The next reset rebuilds the current world (the saved state holds other bodies).
 """
 
 from __future__ import annotations
@@ -36,13 +43,14 @@ import pybullet as pb
 
 from sigcore.backend import GROUND, MAIN, Array, Backend, BackendError, BackendRefusal
 from sigcore.geometry import cross
-from sigcore.world.models import Object, Robot, World
+from sigcore.world.models import Human, Object, Robot, World
 
 from . import grasp, rays
-from .builder import build_world
+from .builder import build_entity, build_world
 from .contacts import ContactMap
 from .frames import compose, invert, to_wxyz, to_xyzw
 from .layout import BASE, EntityIndex, JointIndex
+from .pairs import PairFilters
 from .servo import ServoBank
 
 _ORIGIN = (0.0, 0.0, 0.0)
@@ -103,28 +111,37 @@ class BulletBackend(Backend):
             self.close()
             raise
         self._entities: dict[str, EntityIndex] = {e.name: e for e in entities}
+        self._pairs = PairFilters()  # the client is new or was reset: it holds no pair entry
+        self._collision_off: set[str] = set()
+        self._index()
+        self._built = True
+        self._restart_motors()
+        self._state0 = pb.saveState(physicsClientId=c)
+        self._filters_changed = False
+        self._entities_changed = False
+        self._frozen: set[str] = set()
+        self._restart()
+
+    def _index(self) -> None:
+        """Part ids, the contact map and the possible grasps, from ``_entities`` (in world order) and
+        ``_world``."""
+        world = self._world
         self._part_table: list[tuple[str, str]] = [(GROUND, MAIN)]
         self._part_id: dict[tuple[int, int], int] = {(self._ground, BASE): 0}
-        for e in entities:
+        for e in self._entities.values():
             main_id = len(self._part_table)
             for part in e.parts:
                 self._part_id[(e.body, e.link(part))] = len(self._part_table)
                 self._part_table.append((e.name, part))
             for link in e.links:
                 self._part_id.setdefault((e.body, link), main_id)  # a URDF object's links are its main part
-        entity_of_body = {e.body: i + 1 for i, e in enumerate(entities)}
+        entity_of_body = {e.body: i + 1 for i, e in enumerate(self._entities.values())}
         entity_of_body[self._ground] = 0
         self._contact_map = ContactMap(self._part_id, entity_of_body)
+        self._contacts_tick = -1
         self._graspable = {(r.name, g.part, o.name) for r in world.entities if isinstance(r, Robot)
                            for g in r.grippers for o in world.entities
                            if isinstance(o, Object) and o.graspable and not o.static}
-        self._built = True
-        self._restart_motors()
-        self._state0 = pb.saveState(physicsClientId=c)
-        self._collision_off: set[str] = set()
-        self._filters_changed = False
-        self._frozen: set[str] = set()
-        self._restart()
 
     def _restart(self) -> None:
         """Bookkeeping of the initial state (after build or reset)."""
@@ -140,22 +157,26 @@ class BulletBackend(Backend):
                 self._hold(e, initial=True)
 
     def _restart_motors(self) -> None:
-        c = self.client
         self._servos: dict[str, ServoBank] = {}
         for e in self._entities.values():
-            bank = ServoBank(e.body)
-            for j in e.joints.values():
-                if not j.wheel:
-                    bank.add(j.index, j.kp, j.kv, j.position_gain, j.max_torque)
-            if bank.kp:
-                self._servos[e.name] = bank
-            for j in e.joints.values():
-                if j.wheel:
-                    pb.setJointMotorControl2(e.body, j.index, pb.VELOCITY_CONTROL, targetVelocity=0.0,
-                                             force=j.max_torque, physicsClientId=c)
-                else:
-                    j.initial = float(pb.getJointState(e.body, j.index, physicsClientId=c)[0])
-                    self._position_servo(e, j, j.initial)
+            self._start_motors(e)
+
+    def _start_motors(self, e: EntityIndex) -> None:
+        """Brake ``e``'s wheels and hold its arm joints where they are (a new servo bank)."""
+        c = self.client
+        bank = ServoBank(e.body)
+        for j in e.joints.values():
+            if not j.wheel:
+                bank.add(j.index, j.kp, j.kv, j.position_gain, j.max_torque)
+        if bank.kp:
+            self._servos[e.name] = bank
+        for j in e.joints.values():
+            if j.wheel:
+                pb.setJointMotorControl2(e.body, j.index, pb.VELOCITY_CONTROL, targetVelocity=0.0,
+                                         force=j.max_torque, physicsClientId=c)
+            else:
+                j.initial = float(pb.getJointState(e.body, j.index, physicsClientId=c)[0])
+                self._position_servo(e, j, j.initial)
 
     def _position_servo(self, e: EntityIndex, j: JointIndex, angle: float) -> None:
         self._servos[e.name].hold(j.index, angle)  # the motor is set before each step (see servo.py)
@@ -228,10 +249,13 @@ class BulletBackend(Backend):
         mode switched, a grasp made), the world is rebuilt in the same client instead: PyBullet re-inserts a
         re-filtered link into the broadphase, which changes the pair order and so, slightly, every later
         contact solution (0.2 mm after 0.5 s for a ball rolling off a hand), and ``restoreState`` does not undo
-        that. A rebuild takes about 45 ms for the clean-up world, a restore 0.1 ms.
+        that. A rebuild takes about 45 ms for the clean-up world, a restore 0.1 ms. After entities were added or
+        removed the world is rebuilt too (``restoreState`` needs the bodies of the saved state): the current
+        world from its model, which puts the old entities at their build state and the added ones at their
+        as-added state (their model pose, at rest).
         """
         c = self._client()
-        if self._filters_changed:
+        if self._filters_changed or self._entities_changed:
             pb.resetSimulation(physicsClientId=c)
             self._populate()
             return
@@ -244,6 +268,69 @@ class BulletBackend(Backend):
         pb.restoreState(self._state0, physicsClientId=c)
         self._restart_motors()
         self._restart()
+
+    # ------------------------------------------------------------------ run-time changes
+    def add_entities(self, world: World, names: Sequence[str]) -> None:
+        """Create the entities ``names`` of ``world`` in the running client (``loadURDF`` / ``createMultiBody``,
+        as :meth:`build` does), without touching any existing body.
+
+        Their servos hold their joints at 0 and brake their wheels; static humans are held. Part ids
+        are renumbered in world order. :meth:`reset` then rebuilds the world (see there).
+
+        Raises:
+            BackendError: an entity cannot be built (naming it); the bodies made by this call are removed again.
+        """
+        c = self._client()
+        missing = [name for name in names if name not in {a.name for a in world.agents}]
+        if missing:
+            raise BackendRefusal(f"no agent {', '.join(repr(n) for n in missing)} in the world to add; its agents: "
+                                 f"{', '.join(a.name for a in world.agents)}")
+        made: list[EntityIndex] = []
+        try:
+            for entity in (world.agent(name) for name in names):
+                if entity.name in self._entities or entity.name in (e.name for e in made):
+                    raise BackendRefusal(f"entity '{entity.name}' is already in the world; a new entity needs a "
+                                         "name not taken")
+                if not isinstance(entity, Robot | Object | Human):
+                    raise BackendRefusal(f"agent '{entity.name}' has no body (an <agent>): nothing to add")
+                made.append(build_entity(c, world, entity))
+        except BackendError:
+            for e in made:
+                pb.removeBody(e.body, physicsClientId=c)
+            raise
+        self._world = world
+        for e in made:
+            self._entities[e.name] = e
+            self._mass[e.name] = list(e.masses0)
+            self._start_motors(e)
+            if e.held0:
+                self._hold(e, initial=True)
+        self._index()
+        self._sync_pairs()  # a new body may have the id of a removed one, and its pair entries
+        self._entities_changed = True
+
+    def remove_entities(self, world: World, names: Sequence[str]) -> None:
+        """Remove the bodies of ``names`` (``removeBody``, which also removes their constraints); every other
+        body keeps its state, and one that rested on a removed body falls.
+
+        Grasps that involve them are released first (the core has done so already; this is for safety). Part ids
+        are renumbered in world order. :meth:`reset` then rebuilds the world (see there).
+        """
+        c = self._client()
+        gone = [self._entity(name) for name in names]
+        for key in [k for k in self._grasps if k[0] in names or k[2] in names]:
+            robot, _, obj = key
+            self._release(self._grasps.pop(key), self._entities[robot], self._entities[obj])
+        for e in gone:
+            pb.removeBody(e.body, physicsClientId=c)
+            del self._entities[e.name]
+            for per_entity in (self._servos, self._mass, self._held):
+                per_entity.pop(e.name, None)
+            for names_set in (self._nograv, self._frozen, self._collision_off):
+                names_set.discard(e.name)
+        self._world = world
+        self._index()
+        self._entities_changed = True
 
     # ------------------------------------------------------------------ introspection
     def parts(self, entity: str) -> list[str]:
@@ -428,6 +515,15 @@ class BulletBackend(Backend):
     def _filter(self, e: EntityIndex, enabled: bool) -> None:
         for link in e.links:
             pb.setCollisionFilterGroupMask(e.body, link, *e.filter_bits(link, enabled), physicsClientId=self.client)
+        self._sync_pairs()
+
+    def _bits(self, e: EntityIndex, link: int) -> tuple[int, int]:
+        """Collision ``(group, mask)`` of a link as the entity's collision mode says now."""
+        return e.filter_bits(link, e.name not in self._collision_off)
+
+    def _sync_pairs(self) -> None:
+        """Pair filter entries back to the groups and masks (see :mod:`.pairs`)."""
+        self._pairs.sync(self.client, {e.body: e for e in self._entities.values()}, self._bits)
 
     # ------------------------------------------------------------------ joints
     def get_joint_angle(self, entity: str, joint: str) -> float:
@@ -506,6 +602,7 @@ class BulletBackend(Backend):
             raise BackendRefusal(f"'{entity}' cannot attach '{obj}' to '{part}': only <gripper> parts hold "
                                f"graspable, non-static objects; possible: {', '.join(pairs) or 'none'}")
         self._grasps[key] = grasp.attach(self.client, robot, robot.link(part), target)
+        self._pairs.hold_apart(self.client, robot, target)
         self._filters_changed = True
 
     def detach(self, entity: str, part: str, obj: str) -> None:
@@ -513,7 +610,12 @@ class BulletBackend(Backend):
         self._wake()
         cid = self._grasps.pop((entity, part, obj), None)
         if cid is not None:
-            grasp.detach(self.client, cid, self._entity(entity), self._entity(obj))
+            self._release(cid, self._entity(entity), self._entity(obj))
+
+    def _release(self, cid: int, robot: EntityIndex, obj: EntityIndex) -> None:
+        """Remove a grasp's constraint; the robot and the object collide again as their modes say."""
+        grasp.detach(self.client, cid)
+        self._pairs.release(self.client, robot, obj, self._bits)
 
     # ------------------------------------------------------------------ contacts and rays
     def contacts(self) -> frozenset[tuple[int, int]]:

@@ -21,7 +21,7 @@ import pybullet as pb
 from sigcore.backend import MAIN, BackendError
 from sigcore.scene import human_dimensions
 from sigcore.world.meshes import mesh_problem
-from sigcore.world.models import Human, Object, Robot, World
+from sigcore.world.models import Entity, Human, Object, Robot, World
 from sigcore.world.urdf import UrdfDocument, UrdfError
 
 from .frames import quat_from_rpy
@@ -46,22 +46,36 @@ def build_world(client: int, world: World) -> tuple[int, list[EntityIndex]]:
     ground = pb.createMultiBody(0.0, plane, physicsClientId=client)
     pb.changeDynamics(ground, BASE, lateralFriction=1.0, physicsClientId=client)
     pb.setCollisionFilterGroupMask(ground, BASE, GROUP_STATIC, MASK_STATIC, physicsClientId=client)
-    entities: list[EntityIndex] = []
-    for entity in world.entities:
-        if isinstance(entity, Robot):
-            e = _add_robot(client, world, entity)
-        elif isinstance(entity, Human):
-            e = _add_human(client, entity)
-        elif entity.urdf is not None:
-            e = _add_urdf_object(client, world, entity)
-        else:
-            e = _add_shape_object(client, world, entity)
+    return ground, [build_entity(client, world, entity) for entity in world.entities]
+
+
+def build_entity(client: int, world: World, entity: Entity) -> EntityIndex:
+    """Create one entity of ``world`` in ``client`` (at build, or while running: nothing else is touched).
+
+    Returns:
+        Its index (body, links, parts, joints, masses at creation).
+
+    Raises:
+        BackendError: its model file is missing or rejected; the message names the entity. Nothing of it is left
+            in the client.
+    """
+    if isinstance(entity, Robot):
+        e = _add_robot(client, world, entity)
+    elif isinstance(entity, Human):
+        e = _add_human(client, entity)
+    elif entity.urdf is not None:
+        e = _add_urdf_object(client, world, entity)
+    else:
+        e = _add_shape_object(client, world, entity)
+    try:
         _finish(client, e)
         if isinstance(entity, Object) and entity.urdf is not None and "mass" in entity.model_fields_set \
                 and not entity.static:
             _scale_mass(client, e, entity.mass)
-        entities.append(e)
-    return ground, entities
+    except BackendError:
+        pb.removeBody(e.body, physicsClientId=client)
+        raise
+    return e
 
 
 def _finish(client: int, e: EntityIndex) -> None:

@@ -2,8 +2,9 @@
 
 ``createConstraint`` frames are relative to each link's *inertial* frame (centre of mass); the parent frame is
 the object's inertial pose in the hand's inertial frame, the child frame the identity, so the constraint holds
-the pose of the moment. While attached, the object does not collide with any link of the robot holding it
-(``setCollisionFilterPair`` per link: a pair filter, which keeps the broadphase and other contacts as they are).
+the pose of the moment. While attached, the object does not collide with any link of the robot holding it: the
+backend holds the pair apart with pair filters (:mod:`.pairs`), which keep the broadphase and other contacts as
+they are.
 """
 
 from __future__ import annotations
@@ -34,17 +35,9 @@ def attach(client: int, robot: EntityIndex, link: int, obj: EntityIndex) -> int:
     cid = pb.createConstraint(robot.body, link, obj.body, BASE, pb.JOINT_FIXED, [0, 0, 0], rel_pos, [0, 0, 0],
                               rel_orn, [0, 0, 0, 1], physicsClientId=client)
     pb.changeConstraint(cid, maxForce=MAX_FORCE, physicsClientId=client)
-    _pairs(client, robot, obj, enabled=False)
     return int(cid)
 
 
-def detach(client: int, cid: int, robot: EntityIndex, obj: EntityIndex) -> None:
-    """Remove the constraint ``cid``; the robot and the object collide again."""
+def detach(client: int, cid: int) -> None:
+    """Remove the constraint ``cid``."""
     pb.removeConstraint(cid, physicsClientId=client)
-    _pairs(client, robot, obj, enabled=True)
-
-
-def _pairs(client: int, robot: EntityIndex, obj: EntityIndex, enabled: bool) -> None:
-    for a in robot.links:
-        for b in obj.links:
-            pb.setCollisionFilterPair(robot.body, obj.body, a, b, int(enabled), physicsClientId=client)

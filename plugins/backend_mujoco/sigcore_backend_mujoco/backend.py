@@ -18,13 +18,17 @@ Runtime techniques (each verified against MuJoCo 4.0 in ``tests/backend_mujoco``
 * **Mass:** ``body_mass`` and ``body_inertia`` of the entity's bodies scaled, then ``mj_setConst`` (on a
   scratch ``MjData``) recomputes the derived constants.
 * **Reset** restores a copy of the model taken after build (gains, masses, gravity compensation, collision
-  bits, moved static bodies, weld poses) and the initial ``qpos``/``qvel``/``ctrl``.
+  bits, moved static bodies, weld poses) and the initial ``qpos``/``qvel``/``ctrl``; entities added while running
+  come back as added, those removed stay removed.
+* **Adding and removing entities** recompiles the world's spec once per call and carries every surviving
+  element's state and run-time model values over by name, bit for bit (:mod:`.carry`, :mod:`.recompile`).
 """
 
 from __future__ import annotations
 
 import copy
 import logging
+from collections.abc import Sequence
 from typing import ClassVar
 
 import mujoco
@@ -37,12 +41,14 @@ from sigcore.geometry import quat_to_matrix
 from sigcore.world.models import World
 
 from . import grasp
-from .builder import build_spec
+from .builder import add_to_spec, build_spec, rebuild_spec
+from .carry import carry_data, carry_model, element_map, warm_start
 from .collision import CollisionBits
 from .contacts import ContactMap
-from .layout import EntityIndex, Layout, index_model
-from .plan import EntityPlan
+from .layout import EntityIndex, Layout
+from .plan import EntityPlan, WeldPlan
 from .rays import RayCaster
+from .recompile import compile_world, scale_mass
 from .servo import ArmServo
 
 _NO_INTS = np.zeros(0, dtype=np.int64)
@@ -75,27 +81,24 @@ class MujocoBackend(Backend):
             BackendError: a model file is missing or MuJoCo rejects the model; the message names the entity.
         """
         spec, plans, welds = build_spec(world)
-        try:
-            model = spec.compile()
-        except ValueError as e:
-            raise BackendError(_compile_error(e, plans)) from None
-        self.model = model
-        self.data = mujoco.MjData(model)
-        self._layout: Layout = index_model(model, plans, welds)
-        self._entities: dict[str, EntityIndex] = self._layout.entities
-        self._contact_map = ContactMap(self._layout.geom_part, self._layout.part_entity)
+        model, layout = compile_world(spec, plans, welds, ())
+        self._install(spec, plans, welds, model, copy.copy(model), mujoco.MjData(model), layout)
         self._rays = RayCaster()
-        self._scratch: mujoco.MjData | None = None
-        for plan in plans:
-            if plan.total_mass is not None:
-                self._scale_mass(self._entities[plan.name], plan.total_mass)
-        model.eq_data[:, 11] = 0.0  # welds keep the relative pose we give (mj_setConst must not recompute it)
-        self._servos = [j.servo for e in self._entities.values() for j in e.joints.values()]
-        self._model0 = copy.copy(model)
         self._bits = CollisionBits()
         self._grasps: set[tuple[str, str, str]] = set()
         self._built = True
         self._restart()
+
+    def _install(self, spec: mujoco.MjSpec, plans: list[EntityPlan], welds: list[WeldPlan], model: mujoco.MjModel,
+                 model0: mujoco.MjModel, data: mujoco.MjData, layout: Layout) -> None:
+        """Make ``model`` the running model (``model0``: its state for :meth:`reset`)."""
+        self._spec, self._plans, self._welds = spec, plans, welds
+        self.model, self._model0, self.data = model, model0, data
+        self._layout: Layout = layout
+        self._entities: dict[str, EntityIndex] = layout.entities
+        self._contact_map = ContactMap(layout.geom_part, layout.part_entity)
+        self._scratch: mujoco.MjData | None = None
+        self._servos = [j.servo for e in self._entities.values() for j in e.joints.values()]
 
     def _restart(self) -> None:
         """Initial state on the current model (after build or reset)."""
@@ -163,6 +166,71 @@ class MujocoBackend(Backend):
         self._grasps.clear()
         self._restart()
 
+    # ------------------------------------------------------------------ run-time changes
+    def add_entities(self, world: World, names: Sequence[str]) -> None:
+        """Add the entities ``names`` of ``world``: one recompile of the world's spec, the state carried over
+        bit for bit (see :mod:`.carry`); they start at their model pose, at rest, joints held at 0.
+
+        Raises:
+            BackendError: an entity cannot be built or MuJoCo rejects it (the message names it); the running
+                world is then unchanged.
+        """
+        self._require_world()
+        spec = self._spec.copy()
+        plans, welds = add_to_spec(spec, world, names, self._plans)
+        self._recompile(spec, [*self._plans, *plans], [*self._welds, *welds], plans)
+
+    def remove_entities(self, world: World, names: Sequence[str]) -> None:
+        """Remove the entities ``names``: the world without them laid out anew with the others' elements in the
+        same order (:func:`.builder.rebuild_spec`, so nothing of them is left), one compile, the state of the
+        others carried over bit for bit (see :mod:`.carry`); what rested on them falls.
+
+        Raises:
+            BackendRefusal: a name is not an entity of the running world (nothing is removed).
+        """
+        gone = set(names)
+        for name in names:
+            self._entity(name)
+        welds = [w for w in self._welds if w.robot not in gone and w.obj not in gone]
+        spec, plans = rebuild_spec(world, welds)
+        self._recompile(spec, plans, welds, [])
+
+    def _recompile(self, spec: mujoco.MjSpec, plans: list[EntityPlan], welds: list[WeldPlan],
+                   added: list[EntityPlan]) -> None:
+        """Compile ``spec``, carry the running state over, then switch to it (nothing changes if compiling fails)."""
+        model, layout = compile_world(spec, plans, welds, added)
+        elements = element_map(self.model, model)
+        model0 = copy.copy(model)
+        carry_model(self._model0, model0, elements)
+        carry_model(self.model, model, elements)
+        data = mujoco.MjData(model)
+        carry_data(self.data, data, elements)
+        warm_start(model, data, elements)
+        contacts = self.contacts()
+        old_table, old_entities, old_hold = self._layout.part_table, self._entities, self._hold
+        self._install(spec, plans, welds, model, model0, data, layout)
+        for name, e in self._entities.items():
+            before = old_entities.get(name)
+            for joint, j in e.joints.items():
+                if before is None:
+                    j.servo.restart(model, data)
+                else:
+                    j.servo.mode, j.servo.torque = before.joints[joint].servo.mode, before.joints[joint].servo.torque
+        self._hold = data.qpos.copy()
+        for name in self._held & set(self._entities):
+            self._hold[self._entities[name].qpos] = old_hold[old_entities[name].qpos]
+        self._held = {n for n in self._held if n in self._entities}
+        self._held |= {p.name for p in added if self._entities[p.name].held0}
+        self._rebuild_held()
+        self._bits.forget(set(old_entities) - set(self._entities))
+        self._grasps = {g for g in self._grasps if g[0] in self._entities and g[2] in self._entities}
+        number = {key: i for i, key in enumerate(layout.part_table)}
+        pairs = ((number.get(old_table[a]), number.get(old_table[b])) for a, b in contacts)
+        self._contacts = frozenset((min(a, b), max(a, b)) for a, b in pairs if a is not None and b is not None)
+        self._tick += 1
+        self._synced = -1
+        self._contacts_tick = self._tick
+
     # ------------------------------------------------------------------ introspection
     def parts(self, entity: str) -> list[str]:
         """Part names of ``entity``, main part first (a robot's root link; ``main`` otherwise)."""
@@ -172,9 +240,12 @@ class MujocoBackend(Backend):
         """Movable joints of a robot in URDF order; empty for objects and humans."""
         return list(self._entity(entity).joints)
 
-    def _entity(self, name: str) -> EntityIndex:
+    def _require_world(self) -> None:
         if not self._built:
             raise BackendError("the MuJoCo backend has no world yet; call build(world) first")
+
+    def _entity(self, name: str) -> EntityIndex:
+        self._require_world()
         entity = self._entities.get(name)
         if entity is None:
             raise BackendRefusal(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
@@ -263,16 +334,7 @@ class MujocoBackend(Backend):
         self._scale_mass(e, mass)
 
     def _scale_mass(self, e: EntityIndex, mass: float) -> None:
-        m = self.model
-        total = float(m.body_mass[e.bodies].sum())
-        if total <= 0.0:
-            raise BackendError(f"{e.kind} '{e.name}' has no mass to scale (its URDF has no <inertial>)")
-        factor = mass / total
-        m.body_mass[e.bodies] *= factor
-        m.body_inertia[e.bodies] *= factor
-        if self._scratch is None:
-            self._scratch = mujoco.MjData(m)
-        mujoco.mj_setConst(m, self._scratch)
+        self._scratch = scale_mass(self.model, e, mass, self._scratch)
 
     def set_gravity_mode(self, entity: str, enabled: bool) -> None:
         """Gravity off: ``body_gravcomp = 1`` on every body of the entity (and ``flg_gravcomp`` on)."""
@@ -430,15 +492,3 @@ class MujocoBackend(Backend):
         self._sync()
         return self._rays.cast(self.model, self.data, origin, directions, max_range, geoms)
 
-
-def _compile_error(error: ValueError, plans: list[EntityPlan]) -> str:
-    text = " ".join(str(error).split())
-    owner = next((p for p in plans if f"'{p.name}/" in text), None)
-    where = f"{owner.kind} '{owner.name}': " if owner is not None else ""
-    hint = ""
-    if "no decoder found for mesh" in text:
-        hint = " (MuJoCo reads .stl, .obj and .msh meshes: convert the collision mesh, e.g. to .stl)"
-    if "mass and inertia of moving bodies" in text:
-        hint = (" (every link on a movable joint, and the root link of a robot that is not fixed, needs an "
-                "<inertial> with positive mass and inertia; MuJoCo takes masses only from <inertial>)")
-    return f"{where}MuJoCo cannot compile the world: {text}{hint}"

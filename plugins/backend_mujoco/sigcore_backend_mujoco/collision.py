@@ -27,6 +27,13 @@ class CollisionBits:
         self.grasped.clear()
         self.grasping.clear()
 
+    def forget(self, names: set[str]) -> None:
+        """Drop the state of entities no longer in the world."""
+        self.disabled -= names
+        for table in (self.grasped, self.grasping):
+            for name in names & set(table):
+                del table[name]
+
     def apply(self, model: mujoco.MjModel, entity: EntityIndex) -> None:
         """Write the bits of ``entity``'s collision geoms from its current state."""
         name = entity.name

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from sigcore.agent.events import CollisionEvent
 from sigcore.backend import GROUND
 from sigcore.sim.simulation import Simulation
+from sigcore.world.models import Entity, Robot
 
 from .config import RefereeConfig
 from .items import Award
@@ -42,7 +43,7 @@ class CollisionRule:
 
     def __init__(self, sim: Simulation, config: RefereeConfig, robots: list[str], award: Award) -> None:
         self.sim, self.config, self.award = sim, config, award
-        self.robots = frozenset(robots)
+        self.robots = set(robots)
         self.floor_ok = {r: frozenset(config.floor_parts) if config.floor_parts is not None
                          else default_floor_parts(sim, r) for r in robots}
         tags = set(config.collision_tags)
@@ -53,6 +54,24 @@ class CollisionRule:
     def reset(self) -> None:
         """Close every open episode."""
         self.episodes.clear()
+
+    def add(self, entity: Entity) -> None:
+        """Watch entity ``entity``, spawned while running: penalise touching it if it has a collision tag, and
+        watch it if it is a robot and the rules watch every robot (``robots`` not given)."""
+        tags = set(self.config.collision_tags) & set(entity.tags)
+        if tags:
+            self.penalised[entity.name] = sorted(tags)
+        if isinstance(entity, Robot) and self.config.robots is None:
+            self.robots.add(entity.name)
+            self.floor_ok[entity.name] = frozenset(self.config.floor_parts) if self.config.floor_parts is not None \
+                else default_floor_parts(self.sim, entity.name)
+
+    def remove(self, name: str) -> None:
+        """Forget entity ``name`` (deleted): its open episodes end; the penalties already given stay."""
+        self.penalised.pop(name, None)
+        self.robots.discard(name)
+        self.floor_ok.pop(name, None)
+        self.episodes = {k: e for k, e in self.episodes.items() if name not in k}
 
     def counts(self, robot: str, part: str, other: str) -> bool:
         """Whether contact of ``robot``'s ``part`` with ``other`` is a collision the rules penalise."""

@@ -11,8 +11,9 @@ from pydantic import BaseModel
 
 from sigcore.feature import Feature
 from sigcore.sim.simulation import Simulation
+from sigcore.sim.spawn import EntityChange
 from sigcore.world.exceptions import FieldError
-from sigcore.world.models import Object
+from sigcore.world.models import BareAgent, Entity, Object
 
 from .boxes import TrashBox, inner_volume
 from .collisions import CollisionRule
@@ -80,16 +81,7 @@ class Referee(Feature):
             robots_here = [a.name for a in sim.world.entities if a.kind == "robot"]
             raise FieldError("robots", f"'{unknown[0]}' is not a robot of this world; robots: "
                                        f"{', '.join(robots_here) or 'none'}")
-        boxes = []
-        for entity in sim.world.entities:
-            if cfg.box_tag not in entity.tags:
-                continue
-            inner = cfg.box_inner
-            if inner is None:
-                if not isinstance(entity, Object) or entity.urdf is None:
-                    raise BoxGeometryError(entity.name, "it is not a URDF object")
-                inner = inner_volume(entity.name, sim.world.urdf(entity.name), entity.scale)
-            boxes.append(TrashBox(entity.name, frozenset(entity.tags) - {cfg.box_tag}, inner))
+        boxes = [self._trash_box(e) for e in sim.world.entities if cfg.box_tag in e.tags]
         items = {a.name: frozenset(a.tags) - {cfg.trash_tag} for a in sim.world.entities if cfg.trash_tag in a.tags}
         if not items:
             raise FieldError("trash_tag", f"rules 'cleanup': no entity is tagged '{cfg.trash_tag}'")
@@ -101,6 +93,45 @@ class Referee(Feature):
         self.items = ItemRule(sim, cfg, items, boxes, self.award)
         self.collisions = CollisionRule(sim, cfg, robots, self.award)
         sim.collision_observers.append(self.collisions.on_collision)
+
+    def _trash_box(self, entity: Entity) -> TrashBox:
+        """Entity ``entity`` (tagged ``box_tag``) as a trash box; :class:`BoxGeometryError` if its inner volume
+        cannot be read."""
+        cfg = self.config
+        inner = cfg.box_inner
+        if inner is None:
+            if not isinstance(entity, Object) or entity.urdf is None:
+                raise BoxGeometryError(entity.name, "it is not a URDF object")
+            inner = inner_volume(entity.name, self.sim.world.urdf(entity.name), entity.scale)
+        return TrashBox(entity.name, frozenset(entity.tags) - {cfg.box_tag}, inner)
+
+    def entities_changed(self, change: EntityChange) -> None:
+        """Entities spawned or deleted while running (``rules="cleanup"``): a spawned entity tagged ``box_tag``
+        becomes a trash box, one tagged ``trash_tag`` an item to score (kinds: its other tags), one with a
+        collision tag furniture, a robot one the rules watch (unless ``robots`` is given); a deleted one is no
+        longer expected, and its events stay."""
+        if self.items is None or self.collisions is None:
+            return
+        cfg = self.config
+        for name in change.removed:
+            self.items.remove(name)
+            self.collisions.remove(name)
+        added = [self.sim.world.agent(name) for name in change.added]
+        entities = [a for a in added if not isinstance(a, BareAgent)]
+        for entity in entities:  # boxes first: an item spawned with its box in one call is accepted
+            if cfg.box_tag in entity.tags:
+                try:
+                    self.items.add_box(self._trash_box(entity))
+                except BoxGeometryError as e:
+                    log.warning("referee: spawned '%s' is not a trash box: %s", entity.name, e)
+        for entity in entities:
+            if cfg.trash_tag in entity.tags:
+                kinds = frozenset(entity.tags) - {cfg.trash_tag}
+                if not any(kinds & b.accepts for b in self.items.boxes):
+                    log.warning("referee: no trash box accepts spawned item '%s' (tags %s) yet; it can only be put in "
+                                "a wrong box", entity.name, " ".join(sorted(kinds)) or "none")
+                self.items.add_item(entity.name, kinds)
+            self.collisions.add(entity)
 
     # ------------------------------------------------------------------ scoring
     def award(self, kind: Kind, text: str, points: int) -> None:
@@ -159,8 +190,7 @@ class Referee(Feature):
             self.collisions.look(now)
             self.items.look(now)
             if self.items.done:
-                wrong = [s.name for s in self.items.items.values()
-                         if s.box is not None and not self.items.correct(s.name, self._box(s.box))]
+                wrong = [s.name for s in self.items.items.values() if s.box is not None and not s.correct]
                 if wrong:
                     self.finish("failed", f"every trash item is in a box; wrong box: {', '.join(wrong)}")
                 else:
@@ -169,10 +199,6 @@ class Referee(Feature):
         limit = self.config.time_limit
         if limit > 0 and now - self.start_time >= limit - 1e-9:
             self.finish("time_limit", f"time limit of {limit:g} s reached")
-
-    def _box(self, name: str) -> TrashBox:
-        assert self.items is not None
-        return next(b for b in self.items.boxes if b.name == name)
 
     # ------------------------------------------------------------------ results
     @property

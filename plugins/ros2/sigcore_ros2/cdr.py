@@ -23,6 +23,9 @@ from rclpy.serialization import deserialize_message, serialize_message
 _CODES = {"double": "d", "float": "f", "int32": "i", "uint32": "I", "int64": "q", "uint64": "Q"}
 """struct codes of the numeric ROS types a template can fill."""
 
+ATTEMPTS = 16
+"""Draws of test values tried before a layout is declared unpatchable (one usually suffices)."""
+
 
 class CdrTemplate:
     """The serialized form of one message, with some numeric fields rewritten on each :meth:`pack`.
@@ -55,17 +58,17 @@ class CdrTemplate:
             scalar = not (kind or "").startswith("sequence") and m.group(2) is None
             slots.append((owner, attr, _CODES[m.group(1)], None if scalar else len(getattr(owner, attr))))
         self._slots = slots
-        rng = random.Random(0x5EC0)
-        first = self._set(msg, rng)
-        data = serialize_message(msg)
-        order = "<" if data[1] & 1 else ">"  # CDR encapsulation: 0x0001 little endian, 0x0000 big endian
-        offsets = []
-        for value, code in first:
-            pattern = struct.pack(order + code, value)
-            at = data.find(pattern)
-            if at < 0 or data.find(pattern, at + 1) >= 0:
-                raise ValueError(f"{self._type.__name__}: cannot locate a field in the serialized form")
-            offsets.append((at, code))
+        # random test values whose bytes occur once each; another draw when some occur twice by chance
+        for attempt in range(ATTEMPTS):
+            rng = random.Random(0x5EC0 + attempt)
+            first = self._set(msg, rng)
+            data = serialize_message(msg)
+            order = "<" if data[1] & 1 else ">"  # CDR encapsulation: 0x0001 little endian, 0x0000 big endian
+            offsets = _locate(data, order, first)
+            if offsets is not None:
+                break
+        else:
+            raise ValueError(f"{self._type.__name__}: cannot locate a field in the serialized form")
         # one struct per run of values that follow each other in the serialized form
         self._runs: list[tuple[struct.Struct, int, int, int]] = []  # (struct, offset, first value, end value)
         start = 0
@@ -98,6 +101,18 @@ class CdrTemplate:
         for packer, offset, first, end in self._runs:
             packer.pack_into(buf, offset, *values[first:end])
         return bytes(buf)
+
+
+def _locate(data: bytes, order: str, values: list[tuple[Any, str]]) -> list[tuple[int, str]] | None:
+    """The offset of each value (with its struct code) in ``data``, or None if one is missing or occurs twice."""
+    offsets = []
+    for value, code in values:
+        pattern = struct.pack(order + code, value)
+        at = data.find(pattern)
+        if at < 0 or data.find(pattern, at + 1) >= 0:
+            return None
+        offsets.append((at, code))
+    return offsets
 
 
 def _sample(rng: random.Random, code: str) -> Any:

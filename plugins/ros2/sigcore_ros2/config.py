@@ -187,6 +187,18 @@ def sigros_agents(world: World, words: tuple[str, ...]) -> tuple[set[str], str |
     return selected, None
 
 
+def selects(world: World, words: tuple[str, ...], agent: str) -> bool:
+    """Whether ``sigros_agents`` (``words``, checked when the world was loaded) selects ``agent`` of ``world``:
+    for an agent added while running, by its name, kind or tags; a word naming an agent that is gone selects
+    nothing."""
+    model = next((a for a in world.agents if a.name == agent), None)
+    if model is None:
+        return False
+    tags = () if isinstance(model, BareAgent) else model.tags
+    return any(word == "all" or word == agent or AGENT_KINDS.get(word) == model.kind
+               or (word.startswith("tag:") and word[4:] in tags) for word in words)
+
+
 def config_for(sim: Simulation) -> Ros2Config:
     """The world's ROS 2 settings: its ``<plugin name="ros2">`` element validated against :class:`Ros2Config`
     (defaults if it has none).

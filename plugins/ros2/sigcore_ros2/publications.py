@@ -89,10 +89,12 @@ class PublicationEndpoints(PublicationSink):
         node: The node that owns the publishers.
         qos: QoS profiles (per-topic overrides from the world apply).
         agent_topics: Whether the agents' ``<agent><suffix>`` publications (the sig_ros family) get endpoints
-            (a collection: those of these agents only).
+            (a collection: those of these agents only; a callable: those of the agents it says yes to, asked when
+            the publication is declared, so that it can select agents spawned later).
     """
 
-    def __init__(self, node: Node, qos: Qos, agent_topics: bool | Collection[str] = True,
+    def __init__(self, node: Node, qos: Qos,
+                 agent_topics: bool | Collection[str] | Callable[[str], bool] = True,
                  before: Callable[[], None] | None = None) -> None:
         self.node = node
         self.before = before
@@ -111,8 +113,7 @@ class PublicationEndpoints(PublicationSink):
 
     def declare(self, publication: Publication) -> None:
         """Create the publisher (a type whose interface package is not built is left out with one warning)."""
-        if publication.agent and (not self.agent_topics or (self.agent_topics is not True
-                                                             and publication.agent not in self.agent_topics)):
+        if publication.agent and not self._wanted(publication.agent):
             return
         if publication.topic in self.publishers:
             return
@@ -128,6 +129,22 @@ class PublicationEndpoints(PublicationSink):
         pub = self.node.create_publisher(cls, publication.topic, self._profile(publication))
         self.publishers[publication.topic] = (pub, cls)
         self.names[publication.topic] = publication.full_type
+
+    def _wanted(self, agent: str) -> bool:
+        """Whether the publications of ``agent`` get endpoints."""
+        wanted = self.agent_topics
+        if isinstance(wanted, bool):
+            return wanted
+        if callable(wanted):
+            return wanted(agent)
+        return agent in wanted
+
+    def withdraw(self, publication: Publication) -> None:
+        """Destroy the publisher of ``publication`` (its agent was deleted while running)."""
+        entry = self.publishers.pop(publication.topic, None)
+        self.names.pop(publication.topic, None)
+        if entry is not None:
+            self.node.destroy_publisher(entry[0])
 
     def publish(self, publication: Publication, stamp_ns: int, value: dict[str, Any]) -> None:
         """Fill a message of the declared type and publish it."""

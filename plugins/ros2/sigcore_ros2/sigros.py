@@ -7,6 +7,8 @@ from collections.abc import Collection
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from rclpy.subscription import Subscription
+
 from sigcore.api.call import call, finish
 from sigcore.api.deferred import Deferred
 from sigcore.api.table import ApiEntry
@@ -50,11 +52,45 @@ class SigRosEndpoints:
     def __init__(self, sim: Simulation, node: Node, receiver: Receiver, qos: Qos,
                  agents: Collection[str] | None = None) -> None:
         self.sim = sim
+        self.node = node
+        self.receiver = receiver
+        self.qos = qos
         self.held: list[_Held] = []
         self.names: dict[str, str] = {}  # endpoint name -> ROS type, for tests and docs
         self.missing: set[str] = set()  # API types with no built ROS 2 type (a feature newer than the build)
-        for entry, agent in self.plan(sim, agents):
-            name = entry.name_for(agent)
+        self._of: dict[str, list[tuple[str, Any]]] = {}  # agent -> (endpoint name, subscription or service)
+        self._create(self.plan(sim, agents))
+
+    def add(self, agents: Collection[str]) -> None:
+        """Create the endpoints of ``agents`` (added while running; each under its namespace,
+        ``sim.namespace(agent)``), as the constructor does for the world's."""
+        self._create(self.plan(self.sim, agents))
+
+    def remove(self, agents: Collection[str], why: str) -> None:
+        """Destroy the endpoints of ``agents`` (deleted while running): their held and queued requests are answered
+        first with ``success=false`` and ``why``."""
+        gone = set(agents)
+        for held in [h for h in self.held if h.agent in gone]:
+            _refuse(held.srv, held.header, why)
+        self.held = [h for h in self.held if h.agent not in gone]
+        endpoints = [pair for agent in agents for pair in self._of.pop(agent, [])]
+        if not endpoints:
+            return
+        released = self.receiver.retire([e for _, e in endpoints],
+                                        lambda srv, _request, header: _refuse(srv, header, why))
+        for name, entity in endpoints:
+            self.names.pop(name, None)
+            if released:
+                if isinstance(entity, Subscription):
+                    self.node.destroy_subscription(entity)
+                else:
+                    self.node.destroy_service(entity)
+
+    def _create(self, plan: list[tuple[ApiEntry, str]]) -> None:
+        node, receiver, qos = self.node, self.receiver, self.qos
+        for entry, agent in plan:
+            namespace = self.sim.namespace(agent)
+            name = f"{namespace}/{entry.name_for(agent)}" if namespace else entry.name_for(agent)
             try:
                 ros_type(entry, "srv" if entry.direction == "service" else "msg")
             except (ImportError, AttributeError):
@@ -64,14 +100,16 @@ class SigRosEndpoints:
                                 "interfaces: sigcore interfaces && python scripts/build_interfaces.py",
                                 entry.ros_type, entry.origin)
                 continue
+            entity: Any
             if entry.direction == "subscribe":
                 msg_type = ros_type(entry, "msg")
-                sub = node.create_subscription(msg_type, name, _noop, qos.commands(name))
-                receiver.add_subscription(sub, self._on_message(entry, agent))
+                entity = node.create_subscription(msg_type, name, _noop, qos.commands(name))
+                receiver.add_subscription(entity, self._on_message(entry, agent))
             else:
                 srv_type = ros_type(entry, "srv")
-                srv = node.create_service(srv_type, name, _noop)
+                entity = srv = node.create_service(srv_type, name, _noop)
                 receiver.add_service(srv, self._on_request(entry, agent, srv))
+            self._of.setdefault(agent, []).append((name, entity))
             self.names[name] = entry.ros_type
 
     @staticmethod
@@ -119,9 +157,13 @@ class SigRosEndpoints:
     def refuse_held(self, why: str) -> None:
         """Answer every held request with a refusal (the simulation is stopping or resetting)."""
         for held in self.held:
-            held.srv.send_response(fill(held.srv.srv_type.Response(), {"success": False, "message": why}),
-                                   held.header)
+            _refuse(held.srv, held.header, why)
         self.held = []
+
+
+def _refuse(srv: Any, header: Any, why: str) -> None:
+    """Answer the request ``header`` of ``srv`` with ``success=false`` and ``why``."""
+    srv.send_response(fill(srv.srv_type.Response(), {"success": False, "message": why}), header)
 
 
 def _noop(*_: Any) -> None:

@@ -184,7 +184,7 @@ class EntityQueries:
         """GetEntityBounds: the entity's axis-aligned box in ``world`` at its current pose (TYPE_BOX)."""
         self._known(req.entity)
         lo, hi = self.sim.scene.bounds(req.entity)
-        res.bounds = _box(lo, hi)
+        res.bounds = bounds_box(lo, hi)
         res.result = _ok()
         return False
 
@@ -207,12 +207,13 @@ class EntityQueries:
             res.bounds = Bounds(type=Bounds.TYPE_EMPTY)
         else:
             at, b = np.array(pose.pose.xyz), pose.bounds
-            res.bounds = _box(at + np.array(b[:3]), at + np.array(b[3:]))
+            res.bounds = bounds_box(at + np.array(b[:3]), at + np.array(b[3:]))
         res.result = _ok()
         return False
 
 
-def _box(lo: Any, hi: Any) -> Bounds:
+def bounds_box(lo: Any, hi: Any) -> Bounds:
+    """A TYPE_BOX Bounds with corners ``lo`` (minimum) and ``hi`` (maximum) [m]."""
     return Bounds(type=Bounds.TYPE_BOX, points=[Vector3(x=float(lo[0]), y=float(lo[1]), z=float(lo[2])),
                                                 Vector3(x=float(hi[0]), y=float(hi[1]), z=float(hi[2]))])
 

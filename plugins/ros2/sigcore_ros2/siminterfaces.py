@@ -1,12 +1,15 @@
 """The standard ``simulation_interfaces`` (Jazzy 1.5) services and the ``simulate_steps`` action.
 
-Supported (and listed by get_simulator_features): entity filters by name, category, tags and bounds (box and
-sphere), entity information getting and setting (category, description, tags), entity bounds (an axis-aligned box
-in ``world``), named poses and their bounds, entity state getting and setting, reset (state scope: time never goes
-back), simulation state getting and setting (stopped, playing, paused, quitting), single and multiple steps, the
-SimulateSteps action with one feedback per step. Not supported: spawning and deleting (the services exist and
-answer RESULT_FEATURE_UNSUPPORTED), convex-hull bounds filters (FEATURE_UNSUPPORTED), spawnables, worlds. The
-read side (filters, information, bounds, named poses) is in ``siminfo.py``.
+Supported (and listed by get_simulator_features): spawning (one entity or several in one call, from a URI or a
+resource string: URDF, a world-format element, OBJ and STL meshes, ``model://`` spawnables, with a namespace) and
+deleting while running, spawnables, entity filters by name, category, tags and bounds (box and sphere), entity
+information getting and setting (category, description, tags), entity bounds (an axis-aligned box in ``world``),
+named poses and their bounds, entity state getting and setting, reset (state scope, and the spawned scope that
+deletes what was spawned; time never goes back), simulation state getting and setting (stopped, playing, paused,
+quitting), single and multiple steps, the SimulateSteps action with one feedback per step. Not supported:
+convex-hull bounds filters (FEATURE_UNSUPPORTED), worlds. The core spawns and deletes (``sigcore.sim.spawn``); this
+module maps requests and refusal codes. The read side (filters, information, bounds, named poses) is in
+``siminfo.py``.
 """
 
 from __future__ import annotations
@@ -16,7 +19,15 @@ import math
 import threading
 from typing import TYPE_CHECKING, Any
 
-from simulation_interfaces.msg import EntityState, Result, SimulationState, SimulatorFeatures
+from simulation_interfaces.msg import (
+    Bounds,
+    EntityState,
+    Result,
+    SimulationState,
+    SimulatorFeatures,
+    Spawnable,
+    SpawnResult,
+)
 from simulation_interfaces.srv import (
     DeleteEntity,
     GetEntities,
@@ -28,20 +39,23 @@ from simulation_interfaces.srv import (
     GetNamedPoses,
     GetSimulationState,
     GetSimulatorFeatures,
+    GetSpawnables,
     ResetSimulation,
     SetEntityInfo,
     SetEntityState,
     SetSimulationState,
+    SpawnEntities,
     SpawnEntity,
     StepSimulation,
 )
 
 from sigcore.agent.exceptions import ApiError
 from sigcore.api.call import log_key
+from sigcore.sim.spawn import RefusalCode, SpawnRefusal, SpawnRequest
 from sigcore.text import clip, quote
 
 from .convert import finite, stamp
-from .siminfo import EntityQueries, Refusal
+from .siminfo import EntityQueries, Refusal, bounds_box
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -57,15 +71,31 @@ SUPPORTED = [F.NAMED_POSES, F.POSE_BOUNDS, F.ENTITY_TAGS, F.ENTITY_BOUNDS, F.ENT
              F.ENTITY_CATEGORIES, F.ENTITY_STATE_GETTING, F.ENTITY_STATE_SETTING, F.ENTITY_INFO_GETTING,
              F.ENTITY_INFO_SETTING, F.SIMULATION_RESET, F.SIMULATION_RESET_STATE, F.SIMULATION_STATE_GETTING,
              F.SIMULATION_STATE_SETTING, F.SIMULATION_STATE_PAUSE, F.STEP_SIMULATION_SINGLE,
-             F.STEP_SIMULATION_MULTIPLE, F.STEP_SIMULATION_ACTION]
+             F.STEP_SIMULATION_MULTIPLE, F.STEP_SIMULATION_ACTION, F.SPAWNING, F.DELETING, F.SPAWNING_ENTITIES,
+             F.SPAWNING_RESOURCE_STRING, F.SPAWNABLES, F.SIMULATION_RESET_SPAWNED]
 """What get_simulator_features announces: only what is really implemented."""
+
+SPAWN_FORMATS = ["urdf", "sigcore", "obj", "stl"]
+"""What spawn_entity's ``uri`` and ``resource_string`` may hold: URDF, a world-format element (``sigcore``), meshes."""
+
+SPAWN_CODES: dict[RefusalCode, int] = {
+    "NAME_NOT_UNIQUE": SpawnResult.NAME_NOT_UNIQUE, "NAME_INVALID": SpawnResult.NAME_INVALID,
+    "UNSUPPORTED_FORMAT": SpawnResult.UNSUPPORTED_FORMAT, "NO_RESOURCE": SpawnResult.NO_RESOURCE,
+    "NAMESPACE_INVALID": SpawnResult.NAMESPACE_INVALID, "RESOURCE_PARSE_ERROR": SpawnResult.RESOURCE_PARSE_ERROR,
+    "MISSING_ASSETS": SpawnResult.MISSING_ASSETS, "UNSUPPORTED_ASSETS": SpawnResult.UNSUPPORTED_ASSETS,
+    "INVALID_POSE": SpawnResult.INVALID_POSE, "NOT_FOUND": Result.RESULT_NOT_FOUND,
+    "OPERATION_FAILED": Result.RESULT_OPERATION_FAILED,
+}
+"""The core's refusal codes (:data:`sigcore.sim.spawn.RefusalCode`) as simulation_interfaces result codes (the
+SpawnEntity and SpawnResult constants are the same numbers)."""
 
 SERVICES = {
     "get_simulator_features": GetSimulatorFeatures, "get_entities": GetEntities,
     "get_entity_state": GetEntityState, "set_entity_state": SetEntityState,
     "get_entities_states": GetEntitiesStates, "get_entity_info": GetEntityInfo, "set_entity_info": SetEntityInfo,
     "get_entity_bounds": GetEntityBounds, "get_named_poses": GetNamedPoses,
-    "get_named_pose_bounds": GetNamedPoseBounds, "spawn_entity": SpawnEntity, "delete_entity": DeleteEntity,
+    "get_named_pose_bounds": GetNamedPoseBounds, "spawn_entity": SpawnEntity, "spawn_entities": SpawnEntities,
+    "delete_entity": DeleteEntity, "get_spawnables": GetSpawnables,
     "get_simulation_state": GetSimulationState, "set_simulation_state": SetSimulationState,
     "reset_simulation": ResetSimulation, "step_simulation": StepSimulation,
 }
@@ -186,9 +216,11 @@ class SimInterfaces:
     # Each returns False to have ``response`` sent now, or True if it answers later through ``reply``.
     def _get_simulator_features(self, req: Any, res: Any, reply: Any) -> bool:
         res.features.features = list(SUPPORTED)
-        res.features.spawn_formats = []
+        res.features.spawn_formats = list(SPAWN_FORMATS)
         res.features.custom_info = ("sigcore: time never goes back on reset (SCOPE_TIME unsupported); "
-                                    "spawning/deleting unsupported; sig_ros API as <agent>_<suffix>")
+                                    "spawn_formats: urdf (file, package:// or text), sigcore (one <robot>, <object> "
+                                    "or <human> element of the world format), obj and stl meshes, model://NAME "
+                                    "spawnables; sig_ros API as <agent>_<suffix>")
         return False
 
     def _get_entities(self, req: Any, res: Any, reply: Any) -> bool:
@@ -267,15 +299,69 @@ class SimInterfaces:
         res.result = _result(Result.RESULT_OK)
         return False
 
+    def _changing(self, what: str) -> Result | None:
+        """Why ``what`` (spawning, deleting) is refused now (the simulation is stopped or quitting), or None."""
+        if self.sim.control.stop:
+            return _result(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is quitting")
+        if self.stopped:
+            return _result(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is stopped; set it "
+                                                           "PLAYING or PAUSED first (set_simulation_state)")
+        return None
+
     def _spawn_entity(self, req: Any, res: Any, reply: Any) -> bool:
-        res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
-                             "spawning is not supported: the backend builds the world once; add the entity "
-                             "to the world file")
+        refused = self._changing("spawning")
+        if refused is not None:
+            res.result = refused
+            return False
+        outcome = self.sim.spawn([_spawn_request(req, req.uri, req.resource_string)])[0]
+        res.result, res.entity_name = _spawned(outcome)
+        return False
+
+    def _spawn_entities(self, req: Any, res: Any, reply: Any) -> bool:
+        refused = self._changing("spawning")
+        if refused is not None:
+            res.result = refused
+            return False
+        requests = [_spawn_request(r, r.entity_resource.uri, r.entity_resource.resource_string)
+                    for r in req.spawn_requests]
+        outcomes = self.sim.spawn(requests) if requests else []
+        res.results = []
+        for outcome in outcomes:
+            result, name = _spawned(outcome)
+            res.results.append(SpawnResult(result=result, entity_name=name))
+        failed = [i for i, o in enumerate(outcomes) if isinstance(o, SpawnRefusal)]
+        if failed:
+            added = len(outcomes) - len(failed)
+            first = outcomes[failed[0]]
+            res.result = _result(SpawnEntities.Response.ENTITIES_SPAWN_FAILED,
+                                 f"{len(failed)} of {len(outcomes)} spawn requests failed (indices "
+                                 f"{', '.join(map(str, failed))}; {added} spawned); the first: {first}; see results")
+        else:
+            res.result = _result(Result.RESULT_OK)
         return False
 
     def _delete_entity(self, req: Any, res: Any, reply: Any) -> bool:
-        res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
-                             "deleting is not supported; move the entity away with set_entity_state")
+        refused = self._changing("deleting")
+        if refused is not None:
+            res.result = refused
+            return False
+        try:
+            self.sim.delete([req.entity])
+        except SpawnRefusal as refusal:
+            res.result = _result(SPAWN_CODES[refusal.code], str(refusal))
+            return False
+        res.result = _result(Result.RESULT_OK)
+        return False
+
+    def _get_spawnables(self, req: Any, res: Any, reply: Any) -> bool:
+        res.spawnables = [Spawnable(uri=s.uri, description=s.description,
+                                    spawn_bounds=bounds_box(*s.bounds) if s.bounds is not None
+                                    else Bounds(type=Bounds.TYPE_EMPTY))
+                          for s in self.sim.spawnables()]
+        unknown = [str(source) for source in req.sources]
+        res.result = _result(Result.RESULT_OK, f"sources not searched (sigcore lists worlds/models and its plugins' "
+                                               f"spawnables only): {', '.join(map(quote, unknown))}" if unknown
+                             else "")
         return False
 
     def _get_simulation_state(self, req: Any, res: Any, reply: Any) -> bool:
@@ -313,11 +399,15 @@ class SimInterfaces:
 
     def _reset_simulation(self, req: Any, res: Any, reply: Any) -> bool:
         scope = req.scope
-        if scope == ResetSimulation.Request.SCOPE_TIME:
+        r = ResetSimulation.Request
+        if scope == r.SCOPE_TIME:
             res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
-                                 "sigcore's time never goes back: reset the state (SCOPE_STATE or SCOPE_ALL)")
+                                 "sigcore's time never goes back: reset the state (SCOPE_STATE, SCOPE_SPAWNED or "
+                                 "SCOPE_ALL)")
             return False
-        self.sim.reset()
+        # SCOPE_STATE alone keeps the spawned entities (back to their state as spawned); DEFAULT, ALL and any scope
+        # with SCOPE_SPAWNED also delete them and bring back deleted world-file entities (time never goes back)
+        self.sim.reset(despawn=scope in (r.SCOPE_DEFAULT, r.SCOPE_ALL) or bool(scope & r.SCOPE_SPAWNED))
         self.on_reset()
         res.result = _result(Result.RESULT_OK)
         return False
@@ -355,6 +445,24 @@ class SimInterfaces:
             self.waiters.remove(waiter)
             remaining = max(0, waiter.target - self.sim.step_count)
             self.sim.control.pending_steps = max(0, self.sim.control.pending_steps - remaining)
+
+
+def _spawn_request(req: Any, uri: str, resource: str) -> SpawnRequest:
+    """The core's request for a SpawnEntity service request or message (``uri``, ``resource``: where each keeps
+    them)."""
+    p, o = req.initial_pose.pose.position, req.initial_pose.pose.orientation
+    return SpawnRequest(name=req.name, uri=uri, resource=resource if not uri else "",
+                        xyz=(float(p.x), float(p.y), float(p.z)),
+                        wxyz=(float(o.w), float(o.x), float(o.y), float(o.z)),
+                        frame=req.initial_pose.header.frame_id, namespace=req.entity_namespace,
+                        allow_renaming=bool(req.allow_renaming))
+
+
+def _spawned(outcome: str | SpawnRefusal) -> tuple[Result, str]:
+    """The Result and entity name of one spawn's outcome (a name, or the core's refusal)."""
+    if isinstance(outcome, SpawnRefusal):
+        return _result(SPAWN_CODES[outcome.code], str(outcome)), ""
+    return _result(Result.RESULT_OK), outcome
 
 
 class SimulateStepsAction:

@@ -68,43 +68,94 @@ class StandardEndpoints:
         self._next_clock = 0.0
         self.clock_step = -1
         self.state_every = max(1, round(1.0 / (config.state_rate * sim.dt)))
-        rate = config.entity_tf_rate
-        self.entity_every = 0 if rate <= 0 or not sim.frames.entities else max(1, round(1.0 / (rate * sim.dt)))
+        self.entity_rate = config.entity_tf_rate
+        self.entity_every = 0
+        self.node, self.receiver, self.qos = node, receiver, qos
         self.clock_pub = node.create_publisher(Clock, "/clock", qos.clock())
         self._clock = CdrTemplate(Clock(), ["clock.sec", "clock.nanosec"])
         self.tf_pub = node.create_publisher(TFMessage, "/tf", qos.tf())
         self.topics: dict[str, str] = {"/clock": "rosgraph_msgs/msg/Clock", "/tf": "tf2_msgs/msg/TFMessage"}
-        robots = [h for h in sim.agents.values() if isinstance(h, RobotObj)]
-        self.prefix = {r.name: sim.frames.prefix(r.name) for r in robots}
-        self.base = {r.name: self.prefix[r.name] + sim.urdf(r.name).root for r in robots}
+        self.prefix: dict[str, str] = {}
+        self.base: dict[str, str] = {}
         self.odom_pub: dict[str, Any] = {}
         self.joint_pub: dict[str, Any] = {}
         self.joints: dict[str, list[str]] = {}
         self.scan_pub: dict[tuple[str, str], Any] = {}
-        for robot in robots:
-            name = robot.name
-            self.joints[name] = [j.name for j in sim.urdf(name).movable_joints]
-            topic = f"/{name}/joint_states"
-            self.joint_pub[name] = node.create_publisher(JointState, topic, qos.state(topic))
-            self.topics[topic] = "sensor_msgs/msg/JointState"
-            if sim.robot_model(name).drive is not None:
-                sim.enable_odometry(name)
-                topic = f"/{name}/odom"
-                self.odom_pub[name] = node.create_publisher(Odometry, topic, qos.state(topic))
-                self.topics[topic] = "nav_msgs/msg/Odometry"
-                topic = f"/{name}/cmd_vel"
-                sub = node.create_subscription(Twist, topic, lambda *_: None, qos.commands(topic))
-                receiver.add_subscription(sub, self._cmd_vel(robot))
-                self.topics[topic] = "geometry_msgs/msg/Twist"
-        for lidar in sim.lidars:
-            topic = f"/{lidar.robot}/{lidar.model.name}"
-            self.scan_pub[(lidar.robot, lidar.model.name)] = node.create_publisher(LaserScan, topic,
-                                                                                   qos.sensor(topic))
-            self.topics[topic] = "sensor_msgs/msg/LaserScan"
+        self.cmd_vel_sub: dict[str, Any] = {}
+        self._owned: dict[str, list[str]] = {}  # robot -> its topics
         self._timed_out: set[str] = set()  # robots whose cmd_vel timeout was logged (once each)
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
-        # the state messages, serialized once: each publication only rewrites their numbers
+        self.add([h.name for h in sim.agents.values() if isinstance(h, RobotObj)])
+        sim.scan_observers.append(self._scan)
+
+    # ------------------------------------------------------------------ entities added and removed
+    def add(self, robots: list[str]) -> None:
+        """Create the topics of ``robots`` (the world's at start, or robots added while running, each under its
+        namespace ``sim.namespace(robot)``), then rebuild the state messages."""
+        sim, node, qos = self.sim, self.node, self.qos
+        for name in robots:
+            robot = sim.robot(name)
+            ns = sim.namespace(name)
+            own = self._owned.setdefault(name, [])
+            self.prefix[name] = sim.frames.prefix(name)
+            self.base[name] = self.prefix[name] + sim.urdf(name).root
+            self.joints[name] = [j.name for j in sim.urdf(name).movable_joints]
+            topic = f"{ns}/{name}/joint_states"
+            self.joint_pub[name] = node.create_publisher(JointState, topic, qos.state(topic))
+            self.topics[topic] = "sensor_msgs/msg/JointState"
+            own.append(topic)
+            if sim.robot_model(name).drive is not None:
+                sim.enable_odometry(name)
+                topic = f"{ns}/{name}/odom"
+                self.odom_pub[name] = node.create_publisher(Odometry, topic, qos.state(topic))
+                self.topics[topic] = "nav_msgs/msg/Odometry"
+                own.append(topic)
+                topic = f"{ns}/{name}/cmd_vel"
+                sub = node.create_subscription(Twist, topic, lambda *_: None, qos.commands(topic))
+                self.receiver.add_subscription(sub, self._cmd_vel(robot, topic))
+                self.cmd_vel_sub[name] = sub
+                self.topics[topic] = "geometry_msgs/msg/Twist"
+                own.append(topic)
+            for lidar in sim.lidars:
+                if lidar.robot == name:
+                    topic = f"{ns}/{lidar.robot}/{lidar.model.name}"
+                    self.scan_pub[(lidar.robot, lidar.model.name)] = node.create_publisher(LaserScan, topic,
+                                                                                           qos.sensor(topic))
+                    self.topics[topic] = "sensor_msgs/msg/LaserScan"
+                    own.append(topic)
+        self.rebuild()
+
+    def remove(self, robots: list[str]) -> None:
+        """Destroy the topics of ``robots`` (deleted while running), then rebuild the state messages."""
+        node = self.node
+        for name in robots:
+            for topic in self._owned.pop(name, []):
+                self.topics.pop(topic, None)
+            sub = self.cmd_vel_sub.pop(name, None)
+            if sub is not None and self.receiver.retire([sub]):
+                node.destroy_subscription(sub)
+            for pubs in (self.joint_pub, self.odom_pub):
+                pub = pubs.pop(name, None)
+                if pub is not None:
+                    node.destroy_publisher(pub)
+            for key in [k for k in self.scan_pub if k[0] == name]:
+                node.destroy_publisher(self.scan_pub.pop(key))
+            for table in (self.prefix, self.base, self.joints):
+                table.pop(name, None)
+            self._cmd_vel_deadline.pop(name, None)
+            self._timed_out.discard(name)
+        self.rebuild()
+
+    def rebuild(self) -> None:
+        """Serialize the state messages once for the robots and entities there are now (each publication only
+        rewrites their numbers): at start and after each change of the entities."""
+        sim = self.sim
         frames = sim.frames
+        for name in self.joints:  # a robot's frame prefix depends on how many robots there are
+            self.prefix[name] = frames.prefix(name)
+            self.base[name] = self.prefix[name] + sim.urdf(name).root
+        rate = self.entity_rate
+        self.entity_every = 0 if rate <= 0 or not frames.entities else max(1, round(1.0 / (rate * sim.dt)))
         moving = [name for name in sim.odometry if name in self.odom_pub]
         self._odom = [(sim.odometry[name], self.odom_pub[name],
                        _odometry(self.prefix[name] + "odom", self.base[name], *self._covariance(name)),
@@ -116,7 +167,6 @@ class StandardEndpoints:
         self._joint_states = [(name, joints, self.joint_pub[name], _joint_state(joints), bool(frames.moving(name)))
                               for name, joints in self.joints.items()]
         self._entity_tf = _transforms([(WORLD, e) for e in frames.entities]) if self.entity_every else None
-        sim.scan_observers.append(self._scan)
 
     @staticmethod
     def plan(sim: Simulation) -> list[Endpoint]:
@@ -150,10 +200,10 @@ class StandardEndpoints:
                                    self.sim.odometry[robot].noise)
 
     # ------------------------------------------------------------------ incoming
-    def _cmd_vel(self, robot: RobotObj) -> Any:
-        """The handler of ``/<robot>/cmd_vel``: drive, and stop again after the drive's ``cmd_vel_timeout`` of
-        simulated time without a new accepted message (0: never), like ros2_control's diff_drive_controller."""
-        topic = f"/{robot.name}/cmd_vel"
+    def _cmd_vel(self, robot: RobotObj, topic: str) -> Any:
+        """The handler of ``[/ns]/<robot>/cmd_vel`` (``topic``): drive, and stop again after the drive's
+        ``cmd_vel_timeout`` of simulated time without a new accepted message (0: never), like ros2_control's
+        diff_drive_controller."""
         timeout = self.sim.drive(robot.name).cmd_vel_timeout
         steps = max(1, round(timeout / self.sim.dt)) if timeout > 0 else 0
 

@@ -18,12 +18,13 @@ from sigcore.api.call import log_key
 from sigcore.text import clip
 from sigcore.transport import Endpoint, Transport, TransportError, publication_endpoints
 
-from .config import Ros2Config, config_for, sigros_agents
+from .config import Ros2Config, config_for, selects, sigros_agents
 from .logfilter import OncePerKind
 from .rosargs import RosArgs, parse_ros_args, validate_settings
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
+    from sigcore.sim.spawn import EntityChange
 
 log = logging.getLogger("sigcore.ros2")
 
@@ -68,7 +69,8 @@ class Ros2Transport(Transport):
         self._idle_clock = 0.0
         self._args = RosArgs()
         self.endpoints: dict[str, str] = {}
-        """Every endpoint created, name -> ROS type (after :meth:`start`)."""
+        """Every endpoint that exists, name -> ROS type (after :meth:`start`; updated when entities come and go)."""
+        self._fixed: dict[str, str] = {}  # the action and readiness topic (on their own, after the others)
 
     # ------------------------------------------------------------------ Transport
     def configure(self, args: list[str]) -> None:
@@ -204,17 +206,20 @@ class Ros2Transport(Transport):
         self.standard = StandardEndpoints(sim, node, receiver, qos, config) if config.standard else None
         self.interfaces = SimInterfaces(sim, node, receiver, config.sim_prefix, self._after_reset)
         # everything the core and the features declare (the agents' published topics, /tf_static, /map, ...)
-        self.publications = PublicationEndpoints(node, qos, agent_topics=agents if config.sigros else False,
+        # the agents' published topics: those of the selected world agents, and of agents spawned later that the
+        # selection's kinds and tags pick
+        self._selection = config.sigros_agents
+        self.publications = PublicationEndpoints(node, qos, agent_topics=self._selected if config.sigros else False,
                                                  before=self._clock_first)
         sim.publications.connect(self.publications)
-        self.endpoints = {**(self.sigros.names if self.sigros else {}), **self.publications.names,
-                          **(self.standard.topics if self.standard else {}), **self.interfaces.names}
+        self._collect_endpoints()
         # the action server on its own node and executor (it needs rclpy's waitable machinery)
         self._action_node = rclpy.create_node(f"{node_name}_actions", context=self._context)
         guard_node(self._action_node)  # its parameter services run on the executor: never let them raise
         self.action = SimulateStepsAction(self._action_node, f"{config.sim_prefix}/simulate_steps",
                                           self.interfaces, self._submit)
-        self.endpoints[f"{config.sim_prefix}/simulate_steps"] = "simulation_interfaces/action/SimulateSteps"
+        self._fixed = {f"{config.sim_prefix}/simulate_steps": "simulation_interfaces/action/SimulateSteps"}
+        self.endpoints.update(self._fixed)
         self._executor = MultiThreadedExecutor(num_threads=4, context=self._context)
         self._executor.add_node(self._action_node)
         self._executor_thread = threading.Thread(target=self._spin_actions, name="sigcore-ros2-actions",
@@ -223,12 +228,14 @@ class Ros2Transport(Transport):
             log.warning("qos override for '%s' names no topic of this world; topics: %s", topic,
                         ", ".join(sorted(t for t in self.endpoints if t.startswith("/"))))
         sim.add_step_observer(self._on_step)
+        sim.entity_observers.append(self._entities_changed)
         receiver.start()
         self._executor_thread.start()
         if self.standard is not None:
             self.standard.publish_clock()
             self.standard.publish_state()
         self._ready = node.create_publisher(Bool, READY_TOPIC, qos.latched(READY_TOPIC))
+        self._fixed[READY_TOPIC] = "std_msgs/msg/Bool"
         self.endpoints[READY_TOPIC] = "std_msgs/msg/Bool"
         self._ready.publish(Bool(data=True))
         log.info("ROS 2 transport ready: %d endpoints", len(self.endpoints))
@@ -257,6 +264,8 @@ class Ros2Transport(Transport):
 
         try:
             if self._sim is not None:
+                if self._entities_changed in self._sim.entity_observers:
+                    self._sim.entity_observers.remove(self._entities_changed)
                 self._sim.publications.disconnect(self.publications)
             if not self.publications.flush(FLUSH_TIMEOUT):
                 log.warning("some subscribers did not acknowledge the last messages within %g s", FLUSH_TIMEOUT)
@@ -280,6 +289,41 @@ class Ros2Transport(Transport):
             self._filter.summary(log, force=True)
             for name in ("sigcore.api", "sigcore.ros2"):
                 logging.getLogger(name).removeFilter(self._filter)
+
+    # ------------------------------------------------------------------ entities added and removed
+    def _selected(self, agent: str) -> bool:
+        """Whether ``agent`` gets its sig_ros endpoints (``sigros_agents``; asked for agents spawned later too)."""
+        assert self._sim is not None
+        return selects(self._sim.world, self._selection, agent)
+
+    def _entities_changed(self, change: EntityChange) -> None:
+        """Entities were spawned or deleted (simulation thread): create the endpoints of the added agents and
+        destroy those of the removed ones, as :meth:`start` does for the world's; their declared publications come
+        and go through the core (:meth:`PublicationEndpoints.declare` and ``withdraw``)."""
+        sim = self._sim
+        assert sim is not None
+        if change.removed:
+            if self.sigros is not None:
+                self.sigros.remove(change.removed, "the agent was deleted while the request was held")
+            if self.standard is not None:
+                self.standard.remove([name for name in change.removed if name in self.standard.joints])
+        if change.added:
+            if self.sigros is not None:
+                self.sigros.add([name for name in change.added if name in sim.agents and self._selected(name)])
+            if self.standard is not None:
+                self.standard.add([name for name in change.added if sim.agents.get(name) is not None
+                                   and sim.agents[name].kind == "robot"])
+        elif self.standard is not None:
+            self.standard.rebuild()
+        self._collect_endpoints()
+        if self.standard is not None:
+            self.standard.publish_state()  # the new robots' joint states and TF at once
+
+    def _collect_endpoints(self) -> None:
+        """``self.endpoints``: every endpoint that exists now."""
+        self.endpoints = {**(self.sigros.names if self.sigros else {}), **self.publications.names,
+                          **(self.standard.topics if self.standard else {}), **self.interfaces.names,
+                          **self._fixed}
 
     # ------------------------------------------------------------------ internals
     def _spin_actions(self) -> None:

@@ -46,7 +46,7 @@ for (left, right), seconds in DRIVE:
         wheels(left, right)
         step()
         drive_steps += STEPS
-    wheel_on_floor.append(touching("wheel_l_link") and touching("caster_back_link"))
+    wheel_on_floor.append((touching("wheel_l_link"), touching("caster_back_link")))
 c.spin(1.0)  # every message published during the drive has arrived
 during_drive = [todict(h) for h in hits]
 start = pose()

@@ -46,7 +46,7 @@ ask("/set_entity_state", SetEntityState, entity="wall", **{"state.pose.orientati
 ask("/set_entity_state", SetEntityState, entity="ghost")
 ask("/step_simulation", StepSimulation, steps=10)  # the simulation is playing
 ask("/spawn_entity", SpawnEntity, name="new_box", uri="box.urdf")
-ask("/delete_entity", DeleteEntity, entity="cube")
+ask("/delete_entity", DeleteEntity, entity="ghost")
 # bad topic messages: refused (logged once), never fatal
 for _ in range(3):
     c.publish(msg.EntityVector, "/ball_setPosition", name="", x=nan, y=0.0, z=1.0)

@@ -115,9 +115,12 @@ def load(full: str, kind: str) -> type:
 
 
 def tame(name: str, request: object) -> object:
-    """Leave out what would legitimately end or stall the run (QUITTING, long step requests)."""
+    """Leave out what would legitimately end or stall the run (QUITTING, long step requests) or take endpoints
+    away from the campaign (deleting an entity: its services would never answer again)."""
     if name.endswith("/set_simulation_state") and request.state.state == SimulationState.STATE_QUITTING:
         request.state.state = SimulationState.STATE_PAUSED
+    if name.endswith("/delete_entity"):
+        request.entity = "no_such_" + request.entity
     if name.endswith(("/step_simulation", "/_action/send_goal")):
         target = request.goal if hasattr(request, "goal") else request
         if 100 < target.steps <= 10_000_000:
