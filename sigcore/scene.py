@@ -94,7 +94,7 @@ def _urdf_object(world: World, obj: Object) -> tuple[Visual, ...]:
     """A URDF object's visuals in its entity frame (the root link's), joints at zero, scaled by ``obj.scale``;
     the world file's ``color`` replaces the URDF's colours when it is given."""
     document = world.urdf(obj.name)
-    links = _links_in_root(document.root, document.model.root)
+    links = links_in_root(document.root, document.model.root)
     s = obj.scale
     color = obj.color if "color" in obj.model_fields_set else None
     out = []
@@ -109,7 +109,7 @@ def _urdf_object(world: World, obj: Object) -> tuple[Visual, ...]:
     return tuple(out)
 
 
-def _links_in_root(root: etree._Element, root_link: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def links_in_root(root: etree._Element, root_link: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Pose ``(xyz, wxyz)`` of every link in the root link's frame, every joint at its zero position."""
     joints = {}
     for joint in root.findall("joint"):
@@ -153,6 +153,18 @@ def _local_box(visual: Visual) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 _CORNERS = np.array([[(i >> k) & 1 for k in range(3)] for i in range(8)], dtype=float)
+
+
+def visual_corners(visual: Visual, pos: np.ndarray, quat: np.ndarray) -> np.ndarray | None:
+    """The 8 corners (8, 3) [m] of ``visual``'s box in the frame where its own frame has pose ``(pos, quat)``;
+    None for a mesh whose vertices cannot be read."""
+    box = _local_box(visual)
+    if box is None:
+        return None
+    lo, hi = box
+    rotation = quat_to_matrix(quat_mul(quat, np.array(visual.wxyz)))
+    offset = pos + quat_rotate(quat, np.array(visual.xyz))
+    return (lo + _CORNERS * (hi - lo)) @ rotation.T + offset
 
 
 class Scene:
@@ -234,18 +246,14 @@ class Scene:
                 pos, quat = self._backend.get_pose(name, parts.get(visual.frame))
                 poses[visual.frame] = (np.asarray(pos, dtype=float), np.asarray(quat, dtype=float))
             pos, quat = poses[visual.frame]
-            box = _local_box(visual)
-            if box is None:
+            corners = visual_corners(visual, pos, quat)
+            if corners is None:
                 if visual.mesh not in self._unmeasured:
                     self._unmeasured.add(visual.mesh)  # type: ignore[arg-type]
                     log.warning("bounds of %s: mesh %s is not .obj or .stl (or unreadable); it counts as its "
                                 "origin", name, visual.mesh)
-                box = (np.zeros(3), np.zeros(3))
-            lo, hi = box
-            corners = lo + _CORNERS * (hi - lo)
-            rotation = quat_to_matrix(quat_mul(quat, np.array(visual.wxyz)))
-            offset = pos + quat_rotate(quat, np.array(visual.xyz))
-            points.append(corners @ rotation.T + offset)
+                corners = (pos + quat_rotate(quat, np.array(visual.xyz)))[None, :]
+            points.append(corners)
         if not points:
             pos, _ = self._backend.get_pose(name)
             return np.asarray(pos, dtype=float).copy(), np.asarray(pos, dtype=float).copy()

@@ -22,6 +22,7 @@ from ..api.sources import Source
 from ..api.table import ApiEntry, api_table
 from ..backend import Array, Backend, BackendError
 from ..feature import Feature
+from ..geometry import quat_mul, quat_rotate
 from ..isolation import USER_ERRORS, describe
 from ..publish import Publication, Publications, Publisher
 from ..scene import Scene
@@ -314,8 +315,6 @@ class Simulation:
             if frame not in self.entity_names:
                 raise SpawnRefusal("INVALID_POSE", f"pose frame '{frame[:80]}' is unknown; valid: 'world' (or empty) "
                                                    f"or an entity: {', '.join(self.entity_names)}")
-            from ..geometry import quat_mul, quat_rotate
-
             pos, quat = self.backend.get_pose(frame)
             xyz, wxyz = pos + quat_rotate(quat, xyz), quat_mul(quat, wxyz)
         if self._spawn_dir is None:  # URDF texts of requests, removed with the simulation

@@ -25,8 +25,7 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-from ..geometry import quat_mul, quat_rotate, quat_to_matrix
-from ..scene import _CORNERS, _links_in_root, _local_box, entity_scene
+from ..scene import entity_scene, links_in_root, visual_corners
 from ..sim.spawn import Spawnable
 from .exceptions import WorldError, WorldIssue
 from .models import Entity, Robot, World, valid_name
@@ -190,17 +189,13 @@ def local_bounds(entity: Entity, world: World) -> Bounds | None:
     frames: dict[str, tuple[np.ndarray, np.ndarray]] = {entity.name: (np.zeros(3), np.array([1.0, 0, 0, 0]))}
     if isinstance(entity, Robot):
         document = world.urdf(entity.name)
-        frames.update(_links_in_root(document.root, document.model.root))
+        frames.update(links_in_root(document.root, document.model.root))
     points = []
     for visual in scene.visuals:
-        box = _local_box(visual)
-        if box is None:
+        corners = visual_corners(visual, *frames[visual.frame])
+        if corners is None:
             return None
-        pos, quat = frames[visual.frame]
-        lo, hi = box
-        rotation = quat_to_matrix(quat_mul(quat, np.array(visual.wxyz)))
-        offset = pos + quat_rotate(quat, np.array(visual.xyz))
-        points.append((lo + _CORNERS * (hi - lo)) @ rotation.T + offset)
+        points.append(corners)
     if not points:
         return None
     every = np.vstack(points)
