@@ -125,12 +125,17 @@ def sparse_cost(repeats: int, steps: int) -> tuple[float, float]:
     return statistics.median(times["sparse"]), statistics.median(times["auto"])
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def arguments(doc: str) -> argparse.Namespace:
+    """``--backends``, ``--repeats`` and ``--steps`` of the run-time change benches (this one and worlds.py)."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--backends", nargs="+", default=["mujoco", "bullet"])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--steps", type=int, default=2000)
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def main() -> None:
+    args = arguments(__doc__)
     logging.getLogger("sigcore").setLevel(logging.WARNING)
     print(f"{'backend':8} {'build ms':>9} {'spawn1 ms':>9} {'spawn10 ms':>10} {'delete1 ms':>10} "
           f"{'churned st/s':>12} {'fresh st/s':>10} {'ratio':>6}")

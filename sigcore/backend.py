@@ -47,6 +47,10 @@ class Backend(ABC):
             BackendError: the world cannot be built (e.g. a URDF the engine rejects); the message names the entity.
         """
 
+    def close(self) -> None:  # noqa: B027 - optional, nothing to free by default
+        """Free the engine's resources (the world is unloaded and this backend is not used again); default:
+        nothing."""
+
     @abstractmethod
     def step(self) -> None:
         """Advance physics by one ``world.timestep``; then clear wrenches and torques applied for this step."""

@@ -268,6 +268,9 @@ def run(
     disable_slow_controllers: Annotated[bool, typer.Option(
         "--disable-slow-controllers", help="disable a controller whose callback took longer than "
         "--callback-budget (after it returned), as if it had raised")] = False,
+    worlds: Annotated[list[Path] | None, typer.Option(
+        "--worlds", metavar="PATH", help="a world file, or a folder of them, that a client may load while running "
+        "(get_available_worlds lists it with worlds/); repeatable")] = None,
 ) -> None:
     """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
     stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed. Arguments after
@@ -288,7 +291,11 @@ def run(
     if duration is None and steps is None and transport_obj is None:
         duration = 10.0
         err.print("no --duration or --steps: running 10 simulated seconds")
+    missing = [str(p) for p in worlds or [] if not p.exists()]
+    if missing:
+        raise _fail([f"--worlds {p}: no such file or folder" for p in missing])
     sim = _load(world_file, backend, controller)
+    sim.world_sources = list(worlds or [])
     _check_endpoints(transport_obj, sim)
     gate = _gate(wait_for, wait_timeout, paused, transport_obj, sim)
     total = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
@@ -299,9 +306,9 @@ def run(
     def progress(s: Simulation) -> None:
         if not show_progress or total is None or time.perf_counter() - t0 < 2.0:
             return
-        done = s.step_count
+        done = s.elapsed_steps
         line = (f"  t = {s.time:8.2f} s  ({100 * done / max(total, 1):5.1f} %, "
-                f"{s.time / (time.perf_counter() - t0):.1f}x real time)")
+                f"{s.elapsed_time / (time.perf_counter() - t0):.1f}x real time)")
         if tty:
             err.print(line, end="\r")
         else:
@@ -491,6 +498,27 @@ def spawnables_cmd(
     out.print(table)
     if not found:
         out.print("no spawnables (folders of worlds/models with a spawnable.xml, or a plugin's)")
+
+
+@app.command(name="worlds")
+def worlds_cmd(
+    paths: Annotated[list[Path] | None, typer.Argument(help="world files or folders to list besides worlds/ and the "
+                                                      "plugins' (as sigcore run --worlds adds them)")] = None,
+) -> None:
+    """List the worlds a running simulation may load (load_world): name, file, where found, tags, description."""
+    from .world.catalogue import default_sources, find_worlds
+
+    found, problems = find_worlds(default_sources([], list(paths or [])))
+    table = Table(title="worlds (load_world uri: a name, path or file:// URI)")
+    for col in ("name", "file", "source", "tags", "description"):
+        table.add_column(col)
+    for w in found:  # cells as Text: names and descriptions are never read as markup
+        table.add_row(Text(w.name), Text(str(w.path)), Text(w.source), Text(" ".join(w.tags)), Text(w.description))
+    out.print(table)
+    for problem in problems:
+        err.print(problem, markup=False, soft_wrap=True)
+    if problems:
+        raise typer.Exit(2)
 
 
 def main() -> None:

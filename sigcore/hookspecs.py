@@ -23,6 +23,8 @@ from typing import TYPE_CHECKING, Any
 import pluggy
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from .agent.controller import Controller
     from .backend import Backend
     from .feature import Feature
@@ -85,6 +87,17 @@ def sigcore_register_spawnables(register: Callable[[Spawnable], None]) -> None:
     folder); ``origin`` is set to the plugin's name. A name the plugin registers twice disables the plugin; a name
     another plugin registered first is ignored with a warning naming both; an element that does not validate is
     left out of the list with a warning.
+    """
+
+
+@hookspec
+def sigcore_register_worlds(register: Callable[[Path], None]) -> None:
+    """Register worlds that ``load_world`` may load: call ``register(path)`` with a world file or a folder of them.
+
+    ``get_available_worlds`` and ``sigcore worlds`` list them after the current world, ``worlds/`` and the command
+    line's (:mod:`sigcore.world.catalogue`); a folder contributes each ``*.xml`` directly in it whose root is
+    ``<world>``. A path the plugin registers twice disables the plugin; one that does not exist is listed as a
+    problem of the catalogue, not an error.
     """
 
 

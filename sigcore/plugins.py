@@ -1,4 +1,4 @@
-"""Plugin discovery and the registries of backends, transports, features, controllers and spawnables.
+"""Plugin discovery and the registries of backends, transports, features, controllers, spawnables and worlds.
 
 A plugin is a module (or any object) with ``@sigcore.hookimpl`` functions named after
 :mod:`sigcore.hookspecs`. Installed plugins are found through entry points of group ``sigcore`` by
@@ -18,6 +18,7 @@ import logging
 import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pluggy
@@ -36,7 +37,7 @@ GROUP = "sigcore"
 """Entry-point group that plugin distributions declare."""
 DISABLE_ENV = "SIGCORE_DISABLE_PLUGIN_AUTOLOAD"
 """If set (non-empty), entry points are not loaded; plugins can still be added by :func:`register_plugin`."""
-KINDS = ("backend", "transport", "feature", "controller", "spawnable")
+KINDS = ("backend", "transport", "feature", "controller", "spawnable", "world")
 """What a plugin can register, in the order :attr:`PluginInfo.provides` lists them."""
 _HOOKS = {kind: f"sigcore_register_{kind}s" for kind in KINDS}
 _SPECS = sorted(name for name in vars(hookspecs) if name.startswith("sigcore_"))
@@ -58,7 +59,8 @@ class PluginInfo:
         error: Why the plugin is disabled (where it failed, ``Type: message``), or ``None`` if it loaded.
         module: The entry point's target (``package`` or ``package.module:attr``) or the object's module.
         provides: Names in effect by kind (``backend``, ``transport``, ``feature``, ``controller``,
-            ``spawnable``); a name that another plugin registered first is left out (a warning names both).
+            ``spawnable``, ``world``: a world file's or folder's path); a name that another plugin registered first is
+            left out (a warning names both).
     """
 
     name: str
@@ -284,6 +286,8 @@ def _registrar(kind: str, found: list[tuple[str, Any]], plugin: str) -> Callable
                               "controller": Controller}
     if kind == "spawnable":
         return _spawnable_registrar(found, plugin)
+    if kind == "world":
+        return _world_registrar(found, plugin)
     base = bases[kind]
 
     def check(name: object, cls: object) -> None:
@@ -322,6 +326,20 @@ def _spawnable_registrar(found: list[tuple[str, Any]], plugin: str) -> Callable[
         if any(name == spawnable.name for name, _ in found):
             raise ValueError(f"spawnable '{spawnable.name}' is registered twice by plugin '{plugin}'")
         found.append((spawnable.name, replace(spawnable, origin=plugin)))
+    return register
+
+
+def _world_registrar(found: list[tuple[str, Any]], plugin: str) -> Callable[[Any], None]:
+    """``register(path)``: a world file or a folder of them (``str`` or ``Path``), once per plugin."""
+    from pathlib import Path
+
+    def register(path: Any) -> None:
+        if not isinstance(path, (str, Path)) or not str(path).strip():
+            raise TypeError(f"world {path!r} is not a path (a str or pathlib.Path of a world file or folder)")
+        resolved = Path(path).expanduser().resolve()
+        if any(name == str(resolved) for name, _ in found):
+            raise ValueError(f"world '{resolved}' is registered twice by plugin '{plugin}'")
+        found.append((str(resolved), resolved))
     return register
 
 
@@ -411,6 +429,15 @@ def spawnables() -> dict[str, Spawnable]:
     """Spawnables registered by plugins, by name (``model://NAME``; :mod:`sigcore.world.spawnables` adds the
     folders of ``worlds/models``). Each one's ``origin`` is the plugin's name."""
     return dict(_registry("spawnable"))
+
+
+def worlds() -> list[tuple[Path, str]]:
+    """World files and folders registered by plugins (``sigcore_register_worlds``), each with the plugin's name;
+    :mod:`sigcore.world.catalogue` lists them with ``worlds/`` and the command line's."""
+    load_plugins()
+    assert _state.registry is not None
+    owners = {name: info.name for info in _state.infos for name in info.provides.get("world", ())}
+    return [(path, owners.get(name, "")) for name, path in _state.registry["world"].items()]
 
 
 def get_backend(name: str) -> type[Backend]:

@@ -27,12 +27,12 @@ class RunReport:
 
     Attributes:
         agents: Agent names by kind.
-        steps: Steps taken in this run.
-        sim_time: Simulated time at the end [s].
+        steps: Steps taken in this run (in every world it ran: ``load_world`` may replace the world).
+        sim_time: Simulated time at the end [s] (of the world loaded then).
         wall_time: Wall-clock duration of the run [s].
         failures: Controllers disabled during the run.
         summary: What each feature reported.
-        sim_time_run: Simulated time covered by this run [s].
+        sim_time_run: Simulated time covered by this run [s] (in every world it ran).
         stopped_by: Why the run ended before its duration or steps: ``"SIGINT"`` or ``"SIGTERM"`` for a signal,
             ``"request"`` for ``control.stop`` set by a transport (QUITTING) or a feature (e.g. the referee at the
             end of its task), ``"error"`` when something that is not user code raised (see ``error``); None when
@@ -97,7 +97,7 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
     """
     control = control or sim.control
     target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
-    start_step, start_time = sim.step_count, sim.time
+    start_step, start_time = sim.elapsed_steps, sim.elapsed_time  # a world loaded while running starts at step 0
     with stop_on_signals(control) if handle_signals else nullcontext():
         sim.start()
         try:
@@ -125,8 +125,8 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         kinds.setdefault(handle.kind, []).append(name)
     stopped_by = "error" if error is not None else (control.stop_reason or "request") if control.stop else None
     summary, lines, outcome = sim.summary(), sim.report_lines(), sim.outcome()
-    return RunReport(kinds, sim.step_count - start_step, sim.time, wall, list(sim.dispatch.failures), summary,
-                     sim.time - start_time, stopped_by, list(sim.feature_guard.failures),
+    return RunReport(kinds, sim.elapsed_steps - start_step, sim.time, wall, list(sim.dispatch.failures), summary,
+                     sim.elapsed_time - start_time, stopped_by, list(sim.feature_guard.failures),
                      list(sim.dispatch.slow.values()), lines, outcome, error)
 
 
@@ -137,15 +137,20 @@ def _loop(sim: Simulation, target: int | None, start_step: int, realtime_factor:
     wall0 = _time.perf_counter()
     pace_time, pace_wall = sim.time, wall0  # real-time pacing reference, moved on while paused
     next_progress = wall0 + progress_every
-    while not control.stop and (target is None or sim.step_count - start_step < target):
+    while not control.stop and (target is None or sim.elapsed_steps - start_step < target):
         if transport is not None:
-            idle = control.paused or (control.lockstep and control.pending_steps == 0)
+            idle = control.paused or (control.lockstep and control.pending_steps == 0) or not sim.loaded
             transport.service(0.01 if idle else 0.0)
             if gate is not None and gate.active:
                 gate.poll(control, transport)
         if control.reset:
             control.reset = False
             sim.reset()
+        if not sim.loaded:  # unloaded through the transport: wait for a world (the transport loads one)
+            control.pending_steps = 0
+            if transport is None:
+                break
+            continue
         if control.paused or control.lockstep:
             if control.pending_steps <= 0:
                 if transport is None:

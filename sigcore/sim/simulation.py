@@ -8,7 +8,7 @@ import tempfile
 import weakref
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -46,15 +46,20 @@ from .odometry import WheelOdometry
 from .owners import Owners
 from .spawn import (
     EntityChange,
+    RefusalCode,
     Spawnable,
     SpawnRefusal,
     SpawnRequest,
+    WorldChange,
     build_model,
     check_pose,
     normalize_namespace,
     resource_element,
     unique_name,
 )
+
+if TYPE_CHECKING:
+    from ..world.catalogue import WorldResource
 
 log = logging.getLogger("sigcore")
 
@@ -77,12 +82,40 @@ class Simulation:
 
     def __init__(self, world: World, backend: str | Backend = "mujoco",
                  controllers: dict[str, str] | None = None) -> None:
+        # what lasts from one world to the next (load_world): the run's control, the observers transports and
+        # library users attach, the publication contract and its sinks, the clock of the whole process
+        self._backend_class: type[Backend] = (plugins.get_backend(backend) if isinstance(backend, str)
+                                              else type(backend))
+        self.control = RunControl()
+        self.collision_observers: list[Callable[[CollisionEvent], None]] = []
+        self.message_observers: list[Callable[[Message], None]] = []
+        self.scan_observers: list[Callable[[Scan], None]] = []
+        self._step_observers: list[StepObserver] = []
+        self.entity_observers: list[Callable[[EntityChange], None]] = []
+        """Called after every spawn and delete, once the core's state is consistent (transports, viewers)."""
+        self.world_observers: list[Callable[[WorldChange], None]] = []
+        """Called before a world is unloaded and after one is loaded (:meth:`load_world`, :meth:`unload_world`)."""
+        self.world_sources: list[Path] = []
+        """World files and folders :meth:`available_worlds` lists besides ``worlds/`` (``sigcore run --worlds``)."""
+        self.loaded = True
+        """False after :meth:`unload_world` until a world is loaded: nothing steps, entities are none."""
+        self._steps_before = 0  # steps and simulated time of the worlds unloaded so far (elapsed_steps/_time)
+        self._time_before = 0.0
+        self._source_observers: dict[int, object] = {}  # observers the agents' publication sources attached
+        self._sources_attached = False
+        self.publications = Publications(lambda: self.step_count * self._dt_ns, self._attach_sources)
+        self._started = False  # between start() and stop()
+        self._first_source: Path | None = world.source if world.source.is_file() else None
+        self._setup(world, backend if isinstance(backend, Backend) else self._backend_class(), controllers or {})
+
+    def _setup(self, world: World, backend: Backend, controllers: dict[str, str], notify: bool = True) -> None:
+        """Build everything that belongs to ``world`` (the constructor, and :meth:`load_world` after the old world
+        was torn down); ``notify``: fire ``sigcore_world_loaded`` (not for the empty world of :meth:`unload_world`)."""
         self.world = world
         self.dt = world.timestep
-        self.backend: Backend = plugins.get_backend(backend)() if isinstance(backend, str) else backend
+        self.backend: Backend = backend
         self.backend.build(world)
         self.step_count = 0
-        self.control = RunControl()
         self._models = {a.name: a for a in world.agents}
         self._drives = {r.name: DriveState(r.name, r.drive) for r in world.agents
                         if isinstance(r, Robot) and r.drive is not None}
@@ -108,20 +141,14 @@ class Simulation:
             a.name: (RobotObj if isinstance(a, Robot) else SimObj)(self, a.name, a.kind) for a in world.agents
         }
         self.dispatch = Dispatcher(self.dt)
-        self.collision_observers: list[Callable[[CollisionEvent], None]] = []
-        self.message_observers: list[Callable[[Message], None]] = []
-        self.scan_observers: list[Callable[[Scan], None]] = []
-        self._step_observers: list[StepObserver] = []
         self.lidars: list[LidarSensor] = [
             LidarSensor(r.name, lidar, self.dt, world.seed + i)
             for r in world.agents if isinstance(r, Robot) for i, lidar in enumerate(r.lidars)
         ]
         self.odometry: dict[str, WheelOdometry] = {}
         self._dt_ns = round(self.dt * 1e9)
-        self.publications = Publications(lambda: self.step_count * self._dt_ns, self._attach_sources)
         self._sources: list[tuple[Source, dict[str, Publisher], str | None]] = []  # (source, publishers, feature)
         self._source_slots: dict[tuple[str, str], tuple[Source, dict[str, Publisher], str | None]] = {}
-        self._sources_attached = False
         self._agent_topics: dict[str, list[str]] = {}  # agent -> the topics declared for it (withdrawn on delete)
         self.frames = Frames(self)
         self.scene = Scene(world, self.backend, self.frames.name)
@@ -130,19 +157,17 @@ class Simulation:
         self.description = DescriptionTopics(self)
         self.spawned: dict[str, str] = {}
         """Entities added while running -> their namespace (``""`` or ``/ns``); ``sigcore.sim.spawn``."""
-        self.entity_observers: list[Callable[[EntityChange], None]] = []
-        """Called after every spawn and delete, once the core's state is consistent (transports, viewers)."""
         self._initial_world = world
         self._spawn_dir: Path | None = None
-        self._attach_controllers(controllers or {})
+        self._attach_controllers(controllers)
         self.features: dict[str, Feature] = {}
         self.feature_guard = FeatureGuard()
         """Which feature attached which observer and service; the features disabled while running."""
         self._feature_entries: dict[str, list[ApiEntry]] = {}
         self._create_features()
         self._declare_agent_publications()
-        self._started = False  # between start() and stop()
-        plugins.notify("sigcore_world_loaded", world=world)
+        if notify:
+            plugins.notify("sigcore_world_loaded", world=world)
 
     # ------------------------------------------------------------------ construction
     def _issue(self, agent: str, attribute: str | None, message: str, line: int | None = None) -> WorldIssue:
@@ -258,8 +283,10 @@ class Simulation:
     def _attach_source(self, source: Source, publishers: dict[str, Publisher], feature: str | None) -> None:
         before = self._attached()[0]
         source.attach(self, publishers)
+        added = [o for i, o in self._attached()[0].items() if i not in before]
         if feature is not None:
-            self.feature_guard.adopt(feature, [o for i, o in self._attached()[0].items() if i not in before], ())
+            self.feature_guard.adopt(feature, added, ())
+        self._source_observers.update((id(o), o) for o in added)
 
     # ------------------------------------------------------------------ run-time changes (sigcore.sim.spawn)
     def namespace(self, agent: str) -> str:
@@ -286,6 +313,9 @@ class Simulation:
             Per request, the name the entity got, or the :class:`SpawnRefusal` saying why it was not added (a
             backend failure refuses every request of the call: nothing is added then).
         """
+        if not self.loaded:
+            return [SpawnRefusal("OPERATION_FAILED", "no world is loaded to spawn into; load one first (load_world)")
+                    for _ in requests]
         results: list[str | SpawnRefusal] = []
         models: list[Entity] = []
         namespaces: dict[str, str] = {}
@@ -462,6 +492,143 @@ class Simulation:
                     self.disable_feature(name, "entities_changed", e)
         for observer in list(self.entity_observers):
             observer(change)
+
+    # ------------------------------------------------------------------ worlds (sigcore.world.catalogue)
+    def available_worlds(self, sources: Sequence[str | Path] = ()) -> tuple[list[WorldResource], list[str]]:
+        """The worlds :meth:`load_world` may load (``sigcore.world.catalogue``): the current one, the one the run
+        started with, ``worlds/``, :attr:`world_sources`, the plugins', and ``sources`` (files or folders).
+
+        Returns:
+            The worlds, and one line per source that does not exist or is no world file.
+        """
+        from ..world.catalogue import default_sources, find_worlds
+
+        current = [p for p in (self.world.source if self.loaded else None, self._first_source) if p is not None]
+        found = default_sources(current, self.world_sources) + [(Path(p), "request") for p in sources]
+        return find_worlds(found)
+
+    def load_world(self, world: World) -> None:
+        """Replace the running world by ``world`` (between steps; the process, the transports and their nodes stay):
+        the old world is unloaded (:meth:`unload_world`), then everything of the new one is built as a new
+        :class:`Simulation` would: backend, agents and their controllers (the world file's), features, publications.
+        The new world is paused at time 0 (``step_count`` starts again; :attr:`elapsed_steps` goes on), as
+        simulation_interfaces' LoadWorld leaves it "stopped"; :attr:`world_observers` are told.
+
+        Raises:
+            WorldRefusal: RESOURCE_PARSE_ERROR when a controller or ``<plugin>`` of ``world`` cannot be created
+                (located; found before anything is unloaded when it can be: an unknown controller or plugin name,
+                plugin attributes), OPERATION_FAILED when building it failed later; no world is loaded then.
+        """
+        from ..world.catalogue import WorldRefusal
+
+        self._check_loadable(world)
+        self._teardown(notify=self.loaded)
+        try:
+            self._setup(world, self._backend_class(), {})
+        except (WorldError, BackendError, FeatureError, ApiError) as e:
+            log.error("world '%s' could not be built: %s", world.name, e)
+            self._teardown(notify=False)
+            self._set_no_world()
+            code: RefusalCode = "RESOURCE_PARSE_ERROR" if isinstance(e, WorldError) else "OPERATION_FAILED"
+            raise WorldRefusal(code, f"world '{world.name}' ({world.source}) could not be built, no world is loaded "
+                                     f"now: {e}") from None
+        self.loaded = True
+        self._world_ready()
+        log.info("loaded world '%s' (%s): %d entities", world.name, world.source, len(self.entity_names))
+        for observer in list(self.world_observers):
+            observer(WorldChange("loaded", world))
+
+    def unload_world(self) -> None:
+        """Remove the running world (between steps): every entity, controller, feature and publication of it goes
+        (its features' report lines are logged first); :attr:`loaded` is False until :meth:`load_world`, and
+        nothing steps meanwhile.
+
+        Raises:
+            WorldRefusal: NO_WORLD_LOADED when none is.
+        """
+        from ..world.catalogue import WorldRefusal
+
+        if not self.loaded:
+            raise WorldRefusal("NO_WORLD_LOADED", "no world is loaded; load one first (load_world)")
+        name = self.world.name
+        self._teardown()
+        self._set_no_world()
+        log.info("unloaded world '%s'", name)
+
+    def _check_loadable(self, world: World) -> None:
+        """Refuse ``world`` before anything is torn down when its controllers or plugins cannot be created."""
+        from ..world.catalogue import WorldRefusal
+        from ..world.plugin_config import plugin_issue, validate_plugin
+
+        registered = plugins.controllers()
+        issues: list[WorldIssue] = []
+        for agent in world.agents:
+            if agent.controller is None:
+                continue
+            try:
+                resolve_controller(agent.controller, registered)
+            except USER_ERRORS as e:  # ControllerError, or importing its module raised
+                ln, col = world.location(agent.name, "controller")
+                issues.append(WorldIssue(world.source, ln, col, agent.kind, "controller",
+                                         f"agent '{agent.name}': {e}"))
+        for cfg in world.plugins:
+            try:
+                validate_plugin(world, cfg, plugins.get_feature(cfg.name).config_model)
+            except plugins.PluginError as e:
+                issues.append(plugin_issue(world, cfg, "name", str(e)))
+            except WorldError as e:
+                issues.extend(e.issues)
+            except USER_ERRORS:
+                pass  # the feature's own validator failed: reported when it is created
+        if issues:
+            raise WorldRefusal("RESOURCE_PARSE_ERROR", "; ".join(str(i) for i in issues[:4]))
+
+    def _teardown(self, notify: bool = True) -> None:
+        """Drop everything of the current world; what lasts across worlds (control, observers of transports and
+        library users, the publication sinks) stays."""
+        if notify:
+            for observer in list(self.world_observers):
+                observer(WorldChange("unloading", self.world))
+            for line in self.report_lines():
+                log.info("world '%s' at its end: %s", self.world.name, line)
+        self._steps_before += self.step_count
+        self._time_before += self.time
+        for publication in self.publications.declared:
+            self.publications.withdraw(publication.topic)
+        guard = getattr(self, "feature_guard", None)
+        for attr in OBSERVER_LISTS:
+            observers = getattr(self, attr)
+            if guard is not None:
+                for feature in getattr(self, "features", {}):
+                    observers = guard.detach(feature, observers, self.features)
+            setattr(self, attr, [o for o in observers if id(o) not in self._source_observers])
+        self._source_observers.clear()
+        self.backend.close()
+
+    def _set_no_world(self) -> None:
+        """The state without a world: no entities, features or publications, paused."""
+        self._setup(World(name="none", source=Path("<no world>")), self._backend_class(), {}, notify=False)
+        self.loaded = False
+        self._world_ready()
+
+    def _world_ready(self) -> None:
+        """A world was just set up while the process runs: paused at its time 0; its controllers' ``on_init``
+        (and first ``on_action``) now if the run has started."""
+        c = self.control
+        c.paused, c.pending_steps, c.reset = True, 0, False
+        if self._started:
+            self.dispatch.init(self.time)
+            self.dispatch.actions(self.step_count, self.time)
+
+    @property
+    def elapsed_steps(self) -> int:
+        """Steps taken since the simulation was created, in every world loaded so far."""
+        return self._steps_before + self.step_count
+
+    @property
+    def elapsed_time(self) -> float:
+        """Simulated time since the simulation was created, in every world loaded so far [s]."""
+        return self._time_before + self.time
 
     # ------------------------------------------------------------------ lookups used by handles and the API
     @property
@@ -652,7 +819,13 @@ class Simulation:
         plugins.notify("sigcore_simulation_stopped", simulation=self)
 
     def step(self, n: int = 1) -> None:
-        """Advance ``n`` fixed steps: messages, forces, physics, contacts, controllers, sensors, observers."""
+        """Advance ``n`` fixed steps: messages, forces, physics, contacts, controllers, sensors, observers.
+
+        Raises:
+            ApiError: no world is loaded (:meth:`unload_world`).
+        """
+        if not self.loaded:
+            raise ApiError("no world is loaded: nothing to step; load one first (load_world)")
         if not self._started:
             self.start()
         backend = self.backend

@@ -33,16 +33,17 @@ from lxml import etree
 
 from ..agent.exceptions import ApiError
 from ..geometry import quat_to_rpy
-from ..world.exceptions import WorldError
+from ..world.exceptions import WorldError, issue_code
 from ..world.models import Entity, World, valid_name
 from ..world.parser import parse_world
 from ..world.urdf import UrdfDocument, UrdfError, read_urdf
 
 RefusalCode = Literal["NAME_NOT_UNIQUE", "NAME_INVALID", "UNSUPPORTED_FORMAT", "NO_RESOURCE", "NAMESPACE_INVALID",
                       "RESOURCE_PARSE_ERROR", "MISSING_ASSETS", "UNSUPPORTED_ASSETS", "INVALID_POSE",
-                      "NOT_FOUND", "OPERATION_FAILED"]
+                      "NOT_FOUND", "OPERATION_FAILED", "UNSUPPORTED_ELEMENTS", "NO_WORLD_LOADED"]
 """Why a spawn or delete was refused: simulation_interfaces' ``SpawnResult`` codes, plus ``NOT_FOUND`` (no such
-entity to delete) and ``OPERATION_FAILED`` (the backend failed)."""
+entity to delete) and ``OPERATION_FAILED`` (the backend failed); and for worlds (``sigcore.world.catalogue``)
+LoadWorld's ``UNSUPPORTED_ELEMENTS`` and UnloadWorld's ``NO_WORLD_LOADED``."""
 
 
 class SpawnRefusal(ApiError):
@@ -96,6 +97,21 @@ class EntityChange:
 
     added: tuple[str, ...] = ()
     removed: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class WorldChange:
+    """A world is about to be unloaded, or was just loaded (``Simulation.world_observers``).
+
+    Attributes:
+        kind: ``unloading``: the old world is still complete (its agents, entities, publications), and everything of
+            it goes right after the observers return; ``loaded``: the new world is complete, paused at time 0 (its
+            step count starts again at 0; ``sim.elapsed_steps`` goes on).
+        world: The world unloaded or loaded.
+    """
+
+    kind: Literal["unloading", "loaded"]
+    world: World
 
 
 @dataclass(frozen=True)
@@ -199,10 +215,19 @@ def find_file(uri: str, world: World) -> Path:
         path = Path(uri)
         candidates = [path if path.is_absolute() else world.base_dir / path]
     for candidate in candidates:
-        if candidate.is_file():
+        if path_is(candidate, "is_file"):
             return candidate.resolve()
     raise SpawnRefusal("NOT_FOUND", f"no file for uri {uri[:200]!r}; looked at "
                                     f"{', '.join(str(c) for c in candidates[:6])}")
+
+
+def path_is(path: Path, kind: str) -> bool:
+    """``path.is_file()`` / ``is_dir()`` / ``exists()`` (``kind``), False where the OS refuses the name (e.g. too
+    long) instead of raising."""
+    try:
+        return bool(getattr(path, kind)())
+    except (OSError, ValueError):
+        return False
 
 
 REPOSITORY = Path(__file__).resolve().parents[2]
@@ -359,14 +384,10 @@ def build_model(world: World, element: etree._Element, base: Path, name: str, po
     try:
         parsed = parse_world(base / "<spawn request>", text)
     except WorldError as e:
-        messages = [i.message for i in e.issues]
         detail = "; ".join(f"<{i.element}>{' ' + repr(i.attribute) if i.attribute else ''}: {i.message}"
                            for i in e.issues[:4])
-        if any("file not found" in m for m in messages):
-            code: RefusalCode = "MISSING_ASSETS"
-        elif any(m.startswith("mesh file") for m in messages):
-            code = "UNSUPPORTED_ASSETS"
-        else:
+        code: RefusalCode = issue_code(e.issues)
+        if code == "UNSUPPORTED_ELEMENTS":  # SpawnEntity has no such code
             code = "RESOURCE_PARSE_ERROR"
         raise SpawnRefusal(code, f"entity '{name}': {detail}") from None
     entity = parsed.entities[0]

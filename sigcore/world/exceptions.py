@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 from ..errors import SigcoreError
+
+IssueCode = Literal["MISSING_ASSETS", "UNSUPPORTED_ASSETS", "UNSUPPORTED_ELEMENTS", "RESOURCE_PARSE_ERROR"]
+"""simulation_interfaces' codes for a resource whose world-format text has issues (:func:`issue_code`)."""
 
 
 @dataclass(frozen=True)
@@ -61,3 +66,17 @@ class FieldError(SigcoreError, ValueError):
     def __init__(self, field: str, message: str) -> None:
         self.field = field
         super().__init__(message)
+
+
+def issue_code(issues: Sequence[WorldIssue]) -> IssueCode:
+    """The simulation_interfaces code for a world or element with ``issues``: MISSING_ASSETS (a file it names does
+    not exist), UNSUPPORTED_ASSETS (a mesh sigcore cannot read), UNSUPPORTED_ELEMENTS (an element the format does
+    not have), else RESOURCE_PARSE_ERROR."""
+    messages = [i.message for i in issues]
+    if any("file not found" in m for m in messages):
+        return "MISSING_ASSETS"
+    if any(m.startswith("mesh file") for m in messages):
+        return "UNSUPPORTED_ASSETS"
+    if any(m.startswith("unknown element") for m in messages):
+        return "UNSUPPORTED_ELEMENTS"
+    return "RESOURCE_PARSE_ERROR"

@@ -387,6 +387,9 @@ class World(_Model):
     timestep: float = Field(default=0.002, gt=0, le=0.1, description="physics step in [s]")
     gravity: Vec3 = Field(default=(0.0, 0.0, -9.81), description="'x y z' acceleration in [m/s^2]")
     seed: int = Field(default=0, ge=0, description="seed of sensor noise")
+    description: str = Field(default="", max_length=500,
+                             description="one line saying what the world is for (listed by get_available_worlds)")
+    tags: EntityTags = Field(default=(), description="space-separated labels of the world, e.g. 'indoor home'")
 
     @field_validator("gravity")
     @classmethod

@@ -21,7 +21,7 @@ def test_pause_step_reset_stop_play_quit(sim_proc: SimProcess) -> None:
     without moving /clock back; stop, play and quit work."""
     out = sim_proc.client("control.py", timeout=120)
     assert set(out["features"]) == {0, 1, 2, 3, 4, 5, 6, 8, 9, 10, 11, 12, 13, 14, 20, 22, 23, 24, 25, 26, 31, 32,
-                                    33, 50}  # nothing unsupported announced
+                                    33, 40, 41, 42, 43, 44, 45, 50}  # nothing unsupported announced
     assert out["initial_state"] == PLAYING
     assert (out["pause"], out["paused_state"], out["pause_again"]) == (OK, PAUSED, ALREADY)
     c0, c1 = out["clock_still"]

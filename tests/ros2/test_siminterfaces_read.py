@@ -32,9 +32,10 @@ def out(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict]:
 
 def test_features_list_the_read_side(out: dict) -> None:
     """get_simulator_features lists named poses, pose bounds, entity bounds (box), categories and entity info
-    getting and setting, besides what was there (spawning and deleting: test_spawn_ros2.py); nothing unsupported
-    (convex hulls, worlds)."""
-    assert out["features"] == [0, 1, 2, 3, 4, 5, 6, 8, 9, 10, 11, 12, 13, 14, 20, 22, 23, 24, 25, 26, 31, 32, 33, 50]
+    getting and setting, besides what was there (spawning and deleting: test_spawn_ros2.py; worlds:
+    test_worlds_ros2.py); nothing unsupported (convex hulls)."""
+    assert out["features"] == [0, 1, 2, 3, 4, 5, 6, 8, 9, 10, 11, 12, 13, 14, 20, 22, 23, 24, 25, 26, 31, 32, 33, 40,
+                               41, 42, 43, 44, 45, 50]
 
 
 def test_entity_info_is_the_world_files(out: dict) -> None:

@@ -6,17 +6,18 @@ deleting while running, spawnables, entity filters by name, category, tags and b
 information getting and setting (category, description, tags), entity bounds (an axis-aligned box in ``world``),
 named poses and their bounds, entity state getting and setting, reset (state scope, and the spawned scope that
 deletes what was spawned; time never goes back), simulation state getting and setting (stopped, playing, paused,
-quitting), single and multiple steps, the SimulateSteps action with one feedback per step. Not supported:
-convex-hull bounds filters (FEATURE_UNSUPPORTED), worlds. The core spawns and deletes (``sigcore.sim.spawn``); this
-module maps requests and refusal codes. The read side (filters, information, bounds, named poses) is in
-``siminfo.py``.
+quitting), single and multiple steps, the SimulateSteps action with one feedback per step, worlds (the available
+ones, filtered by tags; the current one; loading by URI, name or resource string; unloading: state NO_WORLD until a
+world is loaded). Not supported: convex-hull bounds filters (FEATURE_UNSUPPORTED). The core spawns, deletes, loads
+and unloads (``sigcore.sim.spawn``, ``sigcore.world.catalogue``); this module maps requests and refusal codes. The
+read side (filters, information, bounds, named poses) is in ``siminfo.py``, the world services in ``worlds.py``,
+the ``simulate_steps`` action (on the steps of :class:`SimInterfaces`) in ``action.py``.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-import threading
 from typing import TYPE_CHECKING, Any
 
 from simulation_interfaces.msg import (
@@ -56,6 +57,8 @@ from sigcore.text import clip, quote
 
 from .convert import finite, stamp
 from .siminfo import EntityQueries, Refusal, bounds_box
+from .worlds import SERVICES as WORLD_SERVICES
+from .worlds import WorldServices
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -72,7 +75,8 @@ SUPPORTED = [F.NAMED_POSES, F.POSE_BOUNDS, F.ENTITY_TAGS, F.ENTITY_BOUNDS, F.ENT
              F.ENTITY_INFO_SETTING, F.SIMULATION_RESET, F.SIMULATION_RESET_STATE, F.SIMULATION_STATE_GETTING,
              F.SIMULATION_STATE_SETTING, F.SIMULATION_STATE_PAUSE, F.STEP_SIMULATION_SINGLE,
              F.STEP_SIMULATION_MULTIPLE, F.STEP_SIMULATION_ACTION, F.SPAWNING, F.DELETING, F.SPAWNING_ENTITIES,
-             F.SPAWNING_RESOURCE_STRING, F.SPAWNABLES, F.SIMULATION_RESET_SPAWNED]
+             F.SPAWNING_RESOURCE_STRING, F.SPAWNABLES, F.SIMULATION_RESET_SPAWNED, F.WORLD_LOADING,
+             F.WORLD_RESOURCE_STRING, F.WORLD_TAGS, F.WORLD_UNLOADING, F.WORLD_INFO_GETTING, F.AVAILABLE_WORLDS]
 """What get_simulator_features announces: only what is really implemented."""
 
 SPAWN_FORMATS = ["urdf", "sigcore", "obj", "stl"]
@@ -97,7 +101,7 @@ SERVICES = {
     "get_named_pose_bounds": GetNamedPoseBounds, "spawn_entity": SpawnEntity, "spawn_entities": SpawnEntities,
     "delete_entity": DeleteEntity, "get_spawnables": GetSpawnables,
     "get_simulation_state": GetSimulationState, "set_simulation_state": SetSimulationState,
-    "reset_simulation": ResetSimulation, "step_simulation": StepSimulation,
+    "reset_simulation": ResetSimulation, "step_simulation": StepSimulation, **WORLD_SERVICES,
 }
 
 
@@ -107,10 +111,6 @@ MAX_STEPS = 10_000_000
 
 def _result(code: int, message: str = "") -> Result:
     return Result(result=code, error_message=message)
-
-
-FEEDBACK_DEPTH = 1000
-"""History of the simulate_steps feedback publisher (reliable): a client that keeps up gets every step's feedback."""
 
 
 class StepWaiter:
@@ -149,10 +149,12 @@ class SimInterfaces:
         self.dt_ns = round(sim.dt * 1e9)
         self.names: dict[str, str] = {}
         self.queries = EntityQueries(sim)
+        self.worlds = WorldServices(sim)
         for name, srv_type in SERVICES.items():
             full = f"{prefix}/{name}"
             srv = node.create_service(srv_type, full, lambda *_: None)
-            method = getattr(self, f"_{name}", None) or getattr(self.queries, name)
+            method = (getattr(self, f"_{name}", None) or getattr(self.queries, name, None)
+                      or getattr(self.worlds, name))
             receiver.add_service(srv, self._bind(srv, method))
             self.names[full] = f"simulation_interfaces/srv/{srv_type.__name__}"
 
@@ -186,6 +188,8 @@ class SimInterfaces:
     def state(self) -> int:
         """The SimulationState constant of the simulation now."""
         c = self.sim.control
+        if not self.sim.loaded:
+            return SimulationState.STATE_QUITTING if c.stop else SimulationState.STATE_NO_WORLD
         if self.stopped:
             return SimulationState.STATE_STOPPED
         if c.stop:
@@ -206,6 +210,19 @@ class SimInterfaces:
                 for w in done:
                     w.done(_result(Result.RESULT_OK))
 
+    def world_loaded(self) -> None:
+        """A world was loaded (``sim.world_observers``): STOPPED (the core leaves it paused at its time 0), stamps
+        with its timestep."""
+        self.dt_ns = round(self.sim.dt * 1e9)
+        self.stopped = True
+
+    def no_world(self, what: str) -> Result | None:
+        """INCORRECT_STATE saying ``what`` needs a world, when none is loaded; else None."""
+        if self.sim.loaded:
+            return None
+        return _result(Result.RESULT_INCORRECT_STATE, f"{what} refused: no world is loaded; load one first "
+                                                      "(load_world)")
+
     def fail_waiters(self, why: str) -> None:
         """Answer every pending step request with a failure."""
         waiters, self.waiters = self.waiters, []
@@ -220,7 +237,9 @@ class SimInterfaces:
         res.features.custom_info = ("sigcore: time never goes back on reset (SCOPE_TIME unsupported); "
                                     "spawn_formats: urdf (file, package:// or text), sigcore (one <robot>, <object> "
                                     "or <human> element of the world format), obj and stl meshes, model://NAME "
-                                    "spawnables; sig_ros API as <agent>_<suffix>")
+                                    "spawnables; worlds: the sigcore world format only (load_world uri: a path, "
+                                    "file:// or package:// URI or an available world's name; elements and assets "
+                                    "are never ignored), local sources only; sig_ros API as <agent>_<suffix>")
         return False
 
     def _get_entities(self, req: Any, res: Any, reply: Any) -> bool:
@@ -262,6 +281,10 @@ class SimInterfaces:
         return False
 
     def _set_entity_state(self, req: Any, res: Any, reply: Any) -> bool:
+        refused = self.no_world("set_entity_state")
+        if refused is not None:
+            res.result = refused
+            return False
         if self._unknown(req.entity, res):
             return False
         st = req.state
@@ -300,9 +323,13 @@ class SimInterfaces:
         return False
 
     def _changing(self, what: str) -> Result | None:
-        """Why ``what`` (spawning, deleting) is refused now (the simulation is stopped or quitting), or None."""
+        """Why ``what`` (spawning, deleting) is refused now (no world, the simulation is stopped or quitting), or
+        None."""
         if self.sim.control.stop:
             return _result(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is quitting")
+        no_world = self.no_world(what)
+        if no_world is not None:
+            return no_world
         if self.stopped:
             return _result(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is stopped; set it "
                                                            "PLAYING or PAUSED first (set_simulation_state)")
@@ -372,6 +399,11 @@ class SimInterfaces:
     def _set_simulation_state(self, req: Any, res: Any, reply: Any) -> bool:
         target, now, c = req.state.state, self.state, self.sim.control
         s = SimulationState
+        if now == s.STATE_NO_WORLD and target != s.STATE_QUITTING:
+            res.result = _result(Result.RESULT_INCORRECT_STATE,
+                                 f"state {target} cannot be set: no world is loaded (state 4 NO_WORLD); load one "
+                                 "first (load_world), or set 3 quitting")
+            return False
         if target == now:
             res.result = _result(SetSimulationState.Response.ALREADY_IN_TARGET_STATE, "already in that state")
             return False
@@ -392,7 +424,8 @@ class SimInterfaces:
             c.stop = True
         else:
             res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
-                                 f"state {target} cannot be set; valid: 0 stopped, 1 playing, 2 paused, 3 quitting")
+                                 f"state {target} cannot be set; valid: 0 stopped, 1 playing, 2 paused, 3 quitting "
+                                 "(no world: unload_world; loading: load_world)")
             return False
         res.result = _result(Result.RESULT_OK)
         return False
@@ -400,6 +433,10 @@ class SimInterfaces:
     def _reset_simulation(self, req: Any, res: Any, reply: Any) -> bool:
         scope = req.scope
         r = ResetSimulation.Request
+        refused = self.no_world("reset_simulation")
+        if refused is not None:
+            res.result = refused
+            return False
         if scope == r.SCOPE_TIME:
             res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
                                  "sigcore's time never goes back: reset the state (SCOPE_STATE, SCOPE_SPAWNED or "
@@ -414,6 +451,10 @@ class SimInterfaces:
 
     def _step_simulation(self, req: Any, res: Any, reply: Any) -> bool:
         steps = int(req.steps)
+        refused = self.no_world("step_simulation")
+        if refused is not None:
+            res.result = refused
+            return False
         if self.state != SimulationState.STATE_PAUSED and not self.stopped:
             res.result = _result(Result.RESULT_OPERATION_FAILED,
                                  "step_simulation needs the simulation paused (set_simulation_state PAUSED)")
@@ -463,90 +504,3 @@ def _spawned(outcome: str | SpawnRefusal) -> tuple[Result, str]:
     if isinstance(outcome, SpawnRefusal):
         return _result(SPAWN_CODES[outcome.code], str(outcome)), ""
     return _result(Result.RESULT_OK), outcome
-
-
-class SimulateStepsAction:
-    """The ``simulate_steps`` action on its own small node and executor thread.
-
-    The execute callback hands the request to the simulation thread through ``submit`` and waits for it. The
-    feedback is published on the simulation thread after each step of the goal, as the action definition says (one
-    small message per step, only while a goal runs); the feedback publisher keeps :data:`FEEDBACK_DEPTH` messages.
-    """
-
-    def __init__(self, node: Node, name: str, interfaces: SimInterfaces, submit: Any) -> None:
-        from rclpy.action import ActionServer, CancelResponse, GoalResponse
-        from rclpy.callback_groups import ReentrantCallbackGroup
-        from rclpy.qos import QoSProfile
-        from simulation_interfaces.action import SimulateSteps
-
-        self.interfaces = interfaces
-        self.submit = submit
-        self.closing = False
-        self.SimulateSteps = SimulateSteps
-        self.server = ActionServer(node, SimulateSteps, name, execute_callback=self._execute,
-                                   goal_callback=lambda _g: GoalResponse.ACCEPT,
-                                   cancel_callback=lambda _g: CancelResponse.ACCEPT,
-                                   callback_group=ReentrantCallbackGroup(),
-                                   feedback_pub_qos_profile=QoSProfile(depth=FEEDBACK_DEPTH))
-
-    def _execute(self, goal: Any) -> Any:
-        action = self.SimulateSteps
-        steps = int(goal.request.steps)
-        finished = threading.Event()
-        outcome: dict[str, Any] = {}
-
-        def start() -> None:
-            i = self.interfaces
-            if i.state != SimulationState.STATE_PAUSED and not i.stopped:
-                outcome["result"] = _result(Result.RESULT_OPERATION_FAILED,
-                                            "simulate_steps needs the simulation paused")
-                finished.set()
-                return
-            if steps > MAX_STEPS:
-                outcome["result"] = _result(Result.RESULT_OPERATION_FAILED,
-                                            f"{steps} steps is too many (max {MAX_STEPS})")
-                finished.set()
-                return
-            if steps <= 0:
-                outcome["result"] = _result(Result.RESULT_OK)
-                finished.set()
-                return
-
-            def done(result: Result) -> None:
-                outcome["result"] = result
-                finished.set()
-
-            def progress(completed: int) -> None:
-                try:
-                    goal.publish_feedback(action.Feedback(completed_steps=completed,
-                                                          remaining_steps=steps - completed))
-                except Exception as e:  # the goal handle went away (shutdown): never stop the simulation
-                    log.warning("simulate_steps feedback failed: %s", clip(str(e), 200),
-                                extra=log_key("simulate_steps", f"feedback {type(e).__name__}"))
-
-            outcome["waiter"] = i.add_steps(steps, done, progress)
-
-        self.submit(start)
-        canceled = False
-        while not finished.wait(0.02):
-            if self.closing:
-                outcome.setdefault("result", _result(Result.RESULT_OPERATION_FAILED, "the simulation stopped"))
-                break
-            if goal.is_cancel_requested and not canceled and "waiter" in outcome:
-                canceled = True
-                waiter = outcome["waiter"]
-
-                def cancel(waiter: StepWaiter = waiter) -> None:
-                    self.interfaces.cancel_steps(waiter)
-                    outcome["result"] = _result(Result.RESULT_OPERATION_FAILED, "canceled")
-                    finished.set()
-
-                self.submit(cancel)
-        result = outcome.get("result", _result(Result.RESULT_OPERATION_FAILED, "no result"))
-        if canceled and result.error_message == "canceled":
-            goal.canceled()
-        elif result.result == Result.RESULT_OK:
-            goal.succeed()
-        else:
-            goal.abort()
-        return action.Result(result=result)

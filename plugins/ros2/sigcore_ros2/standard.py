@@ -60,14 +60,11 @@ class StandardEndpoints:
 
     def __init__(self, sim: Simulation, node: Node, receiver: Receiver, qos: Qos, config: Ros2Config) -> None:
         self.sim = sim
-        self.dt_ns = round(sim.dt * 1e9)
-        self.clock_every = 1 if config.clock_rate <= 0 else max(1, round(1.0 / (config.clock_rate * sim.dt)))
+        self.config = config
         # the /clock policy: every clock_every steps but at most one per clock_gap [s] of wall time, except that a
         # step whose state or scan is published always has its /clock first (docs/ros2.md, "The /clock policy")
         self.clock_gap = 1.0 / config.clock_wall_limit if config.clock_wall_limit > 0 else 0.0
-        self._next_clock = 0.0
-        self.clock_step = -1
-        self.state_every = max(1, round(1.0 / (config.state_rate * sim.dt)))
+        self._timing()
         self.entity_rate = config.entity_tf_rate
         self.entity_every = 0
         self.node, self.receiver, self.qos = node, receiver, qos
@@ -87,6 +84,21 @@ class StandardEndpoints:
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
         self.add([h.name for h in sim.agents.values() if isinstance(h, RobotObj)])
         sim.scan_observers.append(self._scan)
+
+    def _timing(self) -> None:
+        """The step counts of the rates for the world's timestep (at start, and for each world loaded)."""
+        dt, config = self.sim.dt, self.config
+        self.dt_ns = round(dt * 1e9)
+        self.clock_every = 1 if config.clock_rate <= 0 else max(1, round(1.0 / (config.clock_rate * dt)))
+        self.state_every = max(1, round(1.0 / (config.state_rate * dt)))
+        self._next_clock = 0.0
+        self.clock_step = -1
+
+    def world_loaded(self) -> None:
+        """A world was loaded (the old one's robots were removed when it was unloading): the rates follow its
+        timestep, /clock starts again at its time 0, its robots get their topics."""
+        self._timing()
+        self.add([h.name for h in self.sim.agents.values() if isinstance(h, RobotObj)])
 
     # ------------------------------------------------------------------ entities added and removed
     def add(self, robots: list[str]) -> None:

@@ -4,6 +4,11 @@ Threads: a receiver thread waits in ``rcl_wait`` and queues incoming messages an
 on the simulation thread in :meth:`Ros2Transport.service`, between steps, so the simulation never blocks on ROS
 and the same inputs at the same steps give the same results. Publishing happens in step observers, stamped with
 the step's simulated time. The simulate_steps action has its own small node and executor thread.
+
+Worlds come and go while running (``load_world``, ``unload_world``; ``sim.world_observers``): the node, its context,
+the receiver, the action node and the simulation_interfaces services stay; the agents' endpoints and the robots'
+topics of the old world are destroyed and those of the new one created, with the settings the transport started
+with (``sim_prefix``, QoS, ``sigros_agents``).
 """
 
 from __future__ import annotations
@@ -24,7 +29,7 @@ from .rosargs import RosArgs, parse_ros_args, validate_settings
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
-    from sigcore.sim.spawn import EntityChange
+    from sigcore.sim.spawn import EntityChange, WorldChange
 
 log = logging.getLogger("sigcore.ros2")
 
@@ -175,12 +180,13 @@ class Ros2Transport(Transport):
         from rclpy.executors import MultiThreadedExecutor
         from std_msgs.msg import Bool
 
+        from .action import SimulateStepsAction
         from .nodeservices import NodeServices, guard_node, sim_time_overrides
         from .publications import PublicationEndpoints
         from .qos import Qos
         from .receiver import Receiver
         from .sigros import SigRosEndpoints
-        from .siminterfaces import SimInterfaces, SimulateStepsAction
+        from .siminterfaces import SimInterfaces
         from .standard import StandardEndpoints
 
         self._sim = sim
@@ -229,6 +235,7 @@ class Ros2Transport(Transport):
                         ", ".join(sorted(t for t in self.endpoints if t.startswith("/"))))
         sim.add_step_observer(self._on_step)
         sim.entity_observers.append(self._entities_changed)
+        sim.world_observers.append(self._world_changed)
         receiver.start()
         self._executor_thread.start()
         if self.standard is not None:
@@ -266,6 +273,8 @@ class Ros2Transport(Transport):
             if self._sim is not None:
                 if self._entities_changed in self._sim.entity_observers:
                     self._sim.entity_observers.remove(self._entities_changed)
+                if self._world_changed in self._sim.world_observers:
+                    self._sim.world_observers.remove(self._world_changed)
                 self._sim.publications.disconnect(self.publications)
             if not self.publications.flush(FLUSH_TIMEOUT):
                 log.warning("some subscribers did not acknowledge the last messages within %g s", FLUSH_TIMEOUT)
@@ -318,6 +327,30 @@ class Ros2Transport(Transport):
         self._collect_endpoints()
         if self.standard is not None:
             self.standard.publish_state()  # the new robots' joint states and TF at once
+
+    def _world_changed(self, change: WorldChange) -> None:
+        """A world is unloading (still complete) or was loaded (simulation thread). Unloading: pending step requests
+        fail, every agent's sig_ros endpoints and every robot's topics go (held requests answered first). Loaded:
+        the new world's agents get theirs, the state is STOPPED, /clock starts again at the new world's time 0 (its
+        timestep may differ) and is published at once with the robots' state. The declared publications come and go
+        through the core (``PublicationEndpoints.withdraw`` / ``declare``)."""
+        sim = self._sim
+        assert sim is not None
+        if change.kind == "unloading":
+            self.interfaces.fail_waiters(f"the world '{change.world.name}' was unloaded (load_world / unload_world)")
+            if self.sigros is not None:
+                self.sigros.remove(list(sim.agents), "the world was unloaded while the request was held")
+            if self.standard is not None:
+                self.standard.remove(list(self.standard.joints))
+        else:
+            self.interfaces.world_loaded()
+            if self.sigros is not None:
+                self.sigros.add([name for name in sim.agents if self._selected(name)])
+            if self.standard is not None:
+                self.standard.world_loaded()
+                self.standard.publish_clock()
+                self.standard.publish_state()
+        self._collect_endpoints()
 
     def _collect_endpoints(self) -> None:
         """``self.endpoints``: every endpoint that exists now."""

@@ -103,6 +103,18 @@ class Client:
         return got
 
 
+    def graph(self, node: str = "sigcore") -> set[str]:
+        """The topics and services of ``node`` (at the root namespace) as this client sees them now; empty while the
+        node is not discovered yet."""
+        n = self.node
+        try:
+            return ({t for t, _ in n.get_publisher_names_and_types_by_node(node, "/")}
+                    | {t for t, _ in n.get_subscriber_names_and_types_by_node(node, "/")}
+                    | {s for s, _ in n.get_service_names_and_types_by_node(node, "/")})
+        except Exception:  # the node is not discovered yet
+            return set()
+
+
 def emit(result: Any) -> None:
     """Print the result as the last line (JSON) and exit."""
     sys.stdout.write(json.dumps(result) + "\n")

@@ -5,8 +5,9 @@ Usage: fuzz_campaign.py SEED REQUESTS EXPECTED_JSON. EXPECTED_JSON lists the ser
 of the nodes /sigcore and /sigcore_actions and publishes on every topic /sigcore subscribes to, each at least once,
 then random ones until REQUESTS requests were made. Field values are random and hostile: NaN, infinities, huge and
 tiny numbers, extreme integers, 100 kB strings, unicode, control characters, empty and unknown names, long
-sequences. Requests that would legitimately end or stall the run are left out (QUITTING, more than 100 steps).
-Afterwards it checks that the simulation still answers correctly. Prints one JSON object.
+sequences. Requests that would legitimately end or stall the run are left out (QUITTING, more than 100 steps), and
+load_world only gets requests that cannot load a world. Afterwards it checks that the simulation still answers
+correctly, then calls unload_world once (it takes every agent's endpoints away). Prints one JSON object.
 """
 
 import importlib
@@ -121,6 +122,9 @@ def tame(name: str, request: object) -> object:
         request.state.state = SimulationState.STATE_PAUSED
     if name.endswith("/delete_entity"):
         request.entity = "no_such_" + request.entity
+    if name.endswith("/load_world"):  # never a world: a path that does not exist, text that is not XML
+        request.uri = "/no_such_fuzz/" + request.uri if request.uri else ""
+        request.resource_string = "x" + request.resource_string
     if name.endswith(("/step_simulation", "/_action/send_goal")):
         target = request.goal if hasattr(request, "goal") else request
         if 100 < target.steps <= 10_000_000:
@@ -157,6 +161,8 @@ published: dict[str, int] = {}
 slowest = 0.0
 t_start = time.monotonic()
 for name in order:
+    if name.endswith("/unload_world"):
+        continue  # called once at the end
     if name in services:
         cls = load(services[name], "srv")
         request = tame(name, build(cls.Request))
@@ -219,6 +225,9 @@ if goal is not None and goal.accepted:
     after["action"] = result_future.result().result.result.result if result_future.done() else None
 t2 = c.call(srv_mod.GetTime, "/bot_get_time")
 after["time_after_action"] = None if t2 is None else t2.time
+res = c.call(load("simulation_interfaces/srv/UnloadWorld", "srv"), "/unload_world")
+calls["/unload_world"] = calls.get("/unload_world", 0) + 1
+after["unload"] = None if res is None else res.result.result
 emit({"requests": sum(calls.values()) + sum(published.values()) + len(wrong), "calls": calls,
       "published": published, "unanswered": unanswered, "slowest": slowest, "campaign_s": campaign_s,
       "services": sorted(services), "topics": sorted(topics), "after": after})

@@ -71,14 +71,8 @@ def z_of(name: str) -> float | None:
 
 
 def graph() -> set[str]:
-    """The simulation node's topics and services (a client's own subscriptions and service clients left out)."""
-    n = c.node
-    try:
-        return ({t for t, _ in n.get_publisher_names_and_types_by_node("sigcore", "/")}
-                | {t for t, _ in n.get_subscriber_names_and_types_by_node("sigcore", "/")}
-                | {s for s, _ in n.get_service_names_and_types_by_node("sigcore", "/")})
-    except Exception:  # the node is not discovered yet
-        return set()
+    """The simulation node's topics and services."""
+    return c.graph()
 
 
 def all_poses() -> dict:
