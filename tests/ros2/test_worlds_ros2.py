@@ -31,7 +31,7 @@ def run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
     sim = start_sim(tmp_path_factory.mktemp(f"worlds_{request.param}"), CLEANUP, "--backend", request.param,
                     "--worlds", str(WORLD))
     try:
-        out = sim.client("worlds.py", str(CLEANUP), str(ARM6), str(WORLD), timeout=120)
+        out = sim.client("worlds.py", str(CLEANUP), str(ARM6), str(WORLD), timeout=240)
         out["exited"] = wait_until(lambda: not sim.alive(), 30.0)
         out["exit"] = sim.proc.returncode
         out["log"] = sim.output()

@@ -12,6 +12,7 @@ from simulation_interfaces.msg import Result, SimulationState
 from sigcore.api.call import log_key
 from sigcore.text import clip
 
+from .siminfo import Refusal
 from .siminterfaces import MAX_STEPS, SimInterfaces, StepWaiter
 
 if TYPE_CHECKING:
@@ -59,9 +60,10 @@ class SimulateStepsAction:
 
         def start() -> None:
             i = self.interfaces
-            refused = i.no_world("simulate_steps")
-            if refused is not None:
-                outcome["result"] = refused
+            try:
+                i.require_world("simulate_steps")
+            except Refusal as refusal:
+                outcome["result"] = refusal.result()
                 finished.set()
                 return
             if i.state != SimulationState.STATE_PAUSED and not i.stopped:

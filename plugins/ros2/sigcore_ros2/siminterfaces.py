@@ -146,7 +146,6 @@ class SimInterfaces:
         self.stopped = False
         self.waiters: list[StepWaiter] = []
         self.on_reset = on_reset
-        self.dt_ns = round(sim.dt * 1e9)
         self.names: dict[str, str] = {}
         self.queries = EntityQueries(sim)
         self.worlds = WorldServices(sim)
@@ -211,17 +210,18 @@ class SimInterfaces:
                     w.done(_result(Result.RESULT_OK))
 
     def world_loaded(self) -> None:
-        """A world was loaded (``sim.world_observers``): STOPPED (the core leaves it paused at its time 0), stamps
-        with its timestep."""
-        self.dt_ns = round(self.sim.dt * 1e9)
+        """A world was loaded (``sim.world_observers``): STOPPED (the core leaves it paused at its time 0)."""
         self.stopped = True
 
-    def no_world(self, what: str) -> Result | None:
-        """INCORRECT_STATE saying ``what`` needs a world, when none is loaded; else None."""
-        if self.sim.loaded:
-            return None
-        return _result(Result.RESULT_INCORRECT_STATE, f"{what} refused: no world is loaded; load one first "
-                                                      "(load_world)")
+    def require_world(self, what: str) -> None:
+        """Refuse ``what`` when no world is loaded.
+
+        Raises:
+            Refusal: INCORRECT_STATE saying ``what`` needs a world (answered by the service wrapper).
+        """
+        if not self.sim.loaded:
+            raise Refusal(Result.RESULT_INCORRECT_STATE, f"{what} refused: no world is loaded; load one first "
+                                                         "(load_world)")
 
     def fail_waiters(self, why: str) -> None:
         """Answer every pending step request with a failure."""
@@ -252,7 +252,7 @@ class SimInterfaces:
         pos, quat = backend.get_pose(name)
         lin, ang = backend.get_velocity(name)
         st = EntityState()
-        st.header.stamp, st.header.frame_id = stamp(self.sim.step_count, self.dt_ns), "world"
+        st.header.stamp, st.header.frame_id = stamp(self.sim.step_count, round(self.sim.dt * 1e9)), "world"
         p = st.pose
         p.position.x, p.position.y, p.position.z = (float(v) for v in pos)
         p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z = (float(v) for v in quat)
@@ -281,10 +281,7 @@ class SimInterfaces:
         return False
 
     def _set_entity_state(self, req: Any, res: Any, reply: Any) -> bool:
-        refused = self.no_world("set_entity_state")
-        if refused is not None:
-            res.result = refused
-            return False
+        self.require_world("set_entity_state")
         if self._unknown(req.entity, res):
             return False
         st = req.state
@@ -322,33 +319,27 @@ class SimInterfaces:
         res.result = _result(Result.RESULT_OK)
         return False
 
-    def _changing(self, what: str) -> Result | None:
-        """Why ``what`` (spawning, deleting) is refused now (no world, the simulation is stopped or quitting), or
-        None."""
+    def _require_changeable(self, what: str) -> None:
+        """Refuse ``what`` (spawning, deleting) when the simulation is quitting, has no world or is stopped.
+
+        Raises:
+            Refusal: OPERATION_FAILED (quitting, stopped) or INCORRECT_STATE (no world), saying why.
+        """
         if self.sim.control.stop:
-            return _result(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is quitting")
-        no_world = self.no_world(what)
-        if no_world is not None:
-            return no_world
+            raise Refusal(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is quitting")
+        self.require_world(what)
         if self.stopped:
-            return _result(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is stopped; set it "
-                                                           "PLAYING or PAUSED first (set_simulation_state)")
-        return None
+            raise Refusal(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is stopped; set it "
+                                                          "PLAYING or PAUSED first (set_simulation_state)")
 
     def _spawn_entity(self, req: Any, res: Any, reply: Any) -> bool:
-        refused = self._changing("spawning")
-        if refused is not None:
-            res.result = refused
-            return False
+        self._require_changeable("spawning")
         outcome = self.sim.spawn([_spawn_request(req, req.uri, req.resource_string)])[0]
         res.result, res.entity_name = _spawned(outcome)
         return False
 
     def _spawn_entities(self, req: Any, res: Any, reply: Any) -> bool:
-        refused = self._changing("spawning")
-        if refused is not None:
-            res.result = refused
-            return False
+        self._require_changeable("spawning")
         requests = [_spawn_request(r, r.entity_resource.uri, r.entity_resource.resource_string)
                     for r in req.spawn_requests]
         outcomes = self.sim.spawn(requests) if requests else []
@@ -368,10 +359,7 @@ class SimInterfaces:
         return False
 
     def _delete_entity(self, req: Any, res: Any, reply: Any) -> bool:
-        refused = self._changing("deleting")
-        if refused is not None:
-            res.result = refused
-            return False
+        self._require_changeable("deleting")
         try:
             self.sim.delete([req.entity])
         except SpawnRefusal as refusal:
@@ -433,10 +421,7 @@ class SimInterfaces:
     def _reset_simulation(self, req: Any, res: Any, reply: Any) -> bool:
         scope = req.scope
         r = ResetSimulation.Request
-        refused = self.no_world("reset_simulation")
-        if refused is not None:
-            res.result = refused
-            return False
+        self.require_world("reset_simulation")
         if scope == r.SCOPE_TIME:
             res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
                                  "sigcore's time never goes back: reset the state (SCOPE_STATE, SCOPE_SPAWNED or "
@@ -451,10 +436,7 @@ class SimInterfaces:
 
     def _step_simulation(self, req: Any, res: Any, reply: Any) -> bool:
         steps = int(req.steps)
-        refused = self.no_world("step_simulation")
-        if refused is not None:
-            res.result = refused
-            return False
+        self.require_world("step_simulation")
         if self.state != SimulationState.STATE_PAUSED and not self.stopped:
             res.result = _result(Result.RESULT_OPERATION_FAILED,
                                  "step_simulation needs the simulation paused (set_simulation_state PAUSED)")

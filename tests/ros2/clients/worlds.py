@@ -38,6 +38,10 @@ BAD = {
 }
 ROBOT_000 = {"/robot_000_get_obj_position", "/robot_000/cmd_vel", "/robot_000/joint_states"}
 ARM_0 = {"/arm_0_get_obj_position", "/arm_0/joint_states"}
+GRAPH_WAIT = 30.0
+"""Longest wait for the graph or /clock to show a change [s of wall time]: a wide margin for a loaded machine (a
+change normally shows within a second); only a failure waits that long."""
+
 c = Client("worlds_probe")
 c.wait_ready()
 clocks = c.listen(Clock, "/clock")
@@ -108,7 +112,7 @@ out["missing_continue"] = available(additional_sources=["/no/such/worlds"], cont
 out["remote_source"] = available(additional_sources=["https://example.com/worlds"])
 out["file_uri_source"] = available(additional_sources=[DATA.parent.as_uri()])
 out["current"] = current()
-c.wait_for(lambda: ROBOT_000 <= graph(), 15.0)
+c.wait_for(lambda: ROBOT_000 <= graph(), GRAPH_WAIT)
 out["robot_000_before"] = sorted(ROBOT_000 & graph())
 
 # load arm6 by path: STOPPED at time 0, arm_0's endpoints replace robot_000's; PLAYING advances /clock again
@@ -117,28 +121,28 @@ out["load_arm6"] = load(uri=str(ARM6))
 out["state_after_load"] = state()
 out["entities_arm6"] = entities()
 out["clock_after_load"] = clock()
-c.wait_for(lambda: ARM_0 <= graph() and not (ROBOT_000 & graph()), 15.0)
+c.wait_for(lambda: ARM_0 <= graph() and not (ROBOT_000 & graph()), GRAPH_WAIT)
 out["arm_0"] = sorted(ARM_0 & graph())
 out["robot_000_after"] = sorted(ROBOT_000 & graph())
 out["arm_position"] = position("/arm_0_get_obj_position")
 out["current_arm6"] = current()
 out["play"] = set_state(SimulationState.STATE_PLAYING)
-c.wait_for(lambda: bool(clocks) and clocks[-1].clock.sec + clocks[-1].clock.nanosec * 1e-9 > 0.2, 10.0)
+c.wait_for(lambda: bool(clocks) and clocks[-1].clock.sec + clocks[-1].clock.nanosec * 1e-9 > 0.2, GRAPH_WAIT)
 out["clock_playing"] = clock()
 
 # load a world given as text (timestep 0.005) while a long step request is pending: the request fails naming the
 # world; stepping 100 times from STOPPED puts /clock at 0.5 s
 out["pause"] = set_state(SimulationState.STATE_PAUSED)
 stepper = c.node.create_client(StepSimulation, "/step_simulation")
-stepper.wait_for_service(timeout_sec=10.0)
+stepper.wait_for_service(timeout_sec=GRAPH_WAIT)
 pending = stepper.call_async(StepSimulation.Request(steps=1_000_000))  # 2000 s at real time: still pending
 c.spin(0.3)
 out["load_text"] = load(resource_string=TINY)
-c.executor.spin_until_future_complete(pending, timeout_sec=10.0)
+c.executor.spin_until_future_complete(pending, timeout_sec=GRAPH_WAIT)
 out["pending_step"] = result(pending.result() if pending.done() else None)
 out["state_text"] = state()
 out["current_text"] = current()
-c.wait_for(lambda: "/crate_get_obj_position" in graph(), 10.0)
+c.wait_for(lambda: "/crate_get_obj_position" in graph(), GRAPH_WAIT)
 out["crate_endpoint"] = "/crate_get_obj_position" in graph()
 out["entities_text"] = entities()
 out["step_text"] = result(c.call(StepSimulation, "/step_simulation", timeout=30.0, steps=100))
@@ -157,7 +161,7 @@ out["state_unloaded"] = state()
 out["current_unloaded"] = current()
 out["entities_unloaded"] = entities()
 out["clock_unloaded"] = clock()
-c.wait_for(lambda: not (ARM_0 | {"/crate_get_obj_position"}) & graph(), 10.0)
+c.wait_for(lambda: not (ARM_0 | {"/crate_get_obj_position"}) & graph(), GRAPH_WAIT)
 out["graph_unloaded"] = sorted(t for t in graph() if t in ("/tf_static", "/sigcore/scene", "/crate_get_obj_position"))
 out["play_unloaded"] = set_state(SimulationState.STATE_PLAYING)
 out["step_unloaded"] = result(c.call(StepSimulation, "/step_simulation", steps=1))
@@ -166,7 +170,7 @@ out["spawn_unloaded"] = result(c.call(SpawnEntity, "/spawn_entity", name="b",
 out["unload_again"] = result(c.call(UnloadWorld, "/unload_world"))
 out["load_cleanup"] = load(uri="cleanup")
 out["state_cleanup"] = state()
-c.wait_for(lambda: ROBOT_000 <= graph(), 15.0)
+c.wait_for(lambda: ROBOT_000 <= graph(), GRAPH_WAIT)
 out["robot_000_back"] = sorted(ROBOT_000 & graph())
 out["robot_position"] = position("/robot_000_get_obj_position")
 out["current_cleanup"] = current()
