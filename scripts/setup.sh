@@ -2,6 +2,8 @@
 # Set up sigcore on a fresh machine: a virtual environment in .venv with the core, every bundled plugin, the test
 # tools, ROS 2 Jazzy's rclpy from PyPI and the Python typesupport of the interface packages (tf2_msgs,
 # simulation_interfaces, sigcore_msgs) built from interfaces/ and cached in ~/.cache/sigcore/interfaces.
+# The viewer's browser tests need Debian's chromium and chromium-driver: installed with apt-get when run as root,
+# else the command to run is printed (SIGCORE_NO_BROWSER=1 skips them).
 # Idempotent: a second run only checks. Usage: bash scripts/setup.sh   (SIGCORE_NO_ROS=1 skips ROS 2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,5 +37,14 @@ else
 fi
 if [ -z "${SIGCORE_NO_ROS:-}" ]; then
   "$V/python" scripts/build_interfaces.py --venv .venv
+fi
+if [ -z "${SIGCORE_NO_BROWSER:-}" ] && ! { [ -x /usr/bin/chromium ] && [ -x /usr/bin/chromedriver ]; }; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    echo "setup: installing Debian's chromium and chromium-driver (the viewer's browser tests; about 1 minute)"
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null
+  else
+    echo "setup: the viewer's browser tests need chromium and chromium-driver; as root run:" \
+      "apt-get install -y chromium chromium-driver   (or set SIGCORE_NO_BROWSER=1 to skip those tests)" >&2
+  fi
 fi
 "$V/sigcore" plugins

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from .sim import Simulation
     from .sim.startgate import StartGate
     from .transport import Transport
+    from .viewer import Viewer
     from .world import World
 
 app = typer.Typer(help="sigcore: drive a physics simulation through ROS 2 topics and services.",
@@ -32,6 +33,12 @@ out = Console(highlight=False, soft_wrap=True, markup=False)
 err = Console(stderr=True, highlight=False, markup=False)
 
 WorldPath = Annotated[Path, typer.Argument(exists=True, dir_okay=False, readable=True, help="world XML file")]
+Controllers = Annotated[list[str] | None, typer.Option(
+    help="attach a controller: AGENT=NAME (registered name or package.module:Class); repeatable")]
+ViewerHost = Annotated[str, typer.Option(help="address the viewer listens on; 0.0.0.0 for every interface")]
+ViewerPort = Annotated[int | None, typer.Option(
+    help="the viewer's port; default 8080, or the next free one when it is taken")]
+ViewerRate = Annotated[float, typer.Option(help="scene updates per second of wall time [Hz]")]
 
 
 def _fail(lines: list[str], code: int = 2) -> typer.Exit:
@@ -227,9 +234,28 @@ def _check_pace(fast: bool, realtime: bool, factor: float | None) -> None:
                      "--realtime (= --factor 1) or --factor F (F times real time)"])
 
 
+def _viewer(enabled: bool, host: str, port: int | None, rate: float) -> Viewer | None:
+    """The viewer to start beside the transport (``--viewer``), listening already (its URL known), or None."""
+    from .viewer import DEFAULT_VIEWER, ViewerError
+
+    if not enabled:
+        return None
+    try:
+        cls = plugins.get_viewer(DEFAULT_VIEWER)
+    except plugins.PluginError as e:
+        raise _fail([f"--viewer: {e}; the web viewer is the distribution sigcore-viewer "
+                     "(pip install -e plugins/viewer, which scripts/setup.sh does)"]) from None
+    try:
+        viewer = cls(host=host, port=port, rate=rate)
+        viewer.open()
+    except ViewerError as e:
+        raise _fail([f"--viewer: {e}"]) from None
+    return viewer
+
+
 def _pace(fast: bool, realtime: bool, factor: float | None, transport_on: bool) -> float | None:
     """The real-time factor of the run (None: as fast as possible): the option given, else real time with a
-    transport and as fast as possible without."""
+    transport or a viewer and as fast as possible without."""
     if fast:
         return None
     if realtime:
@@ -260,8 +286,7 @@ def run(
     transport: Annotated[str | None, typer.Option(
         help=f"transport plugin; default '{DEFAULT_TRANSPORT}' when installed; 'none' for a bare batch run")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no progress display")] = False,
-    controller: Annotated[list[str] | None, typer.Option(
-        help="attach a controller: AGENT=NAME (registered name or package.module:Class); repeatable")] = None,
+    controller: Controllers = None,
     callback_budget: Annotated[float, typer.Option(
         min=0, help="wall-clock time one controller callback may take before it is reported [s]; 0: no limit")]
         = CALLBACK_BUDGET,
@@ -271,24 +296,31 @@ def run(
     worlds: Annotated[list[Path] | None, typer.Option(
         "--worlds", metavar="PATH", help="a world file, or a folder of them, that a client may load while running "
         "(get_available_worlds lists it with worlds/); repeatable")] = None,
+    viewer: Annotated[bool, typer.Option(
+        "--viewer", help="also start the web viewer (sigcore-viewer): open the printed URL in a browser")] = False,
+    viewer_host: ViewerHost = "127.0.0.1",
+    viewer_port: ViewerPort = None,
+    viewer_rate: ViewerRate = 30.0,
 ) -> None:
     """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
     stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed. Arguments after
     --ros-args (up to an optional --) go to the transport: -r FROM:=TO, -r __ns:=/NS, -p NAME:=VALUE,
-    --log-level LEVEL."""
+    --log-level LEVEL. --viewer shows the world live in a browser, with play, pause, step, reset and messages."""
     from .sim import run as run_sim
 
     _check_pace(fast, realtime, factor)
-    if paused and transport == "none":
-        raise _fail(["--paused needs a transport that can resume the simulation; drop --transport none"])
+    if paused and transport == "none" and not viewer:
+        raise _fail(["--paused needs a transport or a viewer that can resume the simulation; drop --transport "
+                     "none or add --viewer"])
     transport_obj = _transport(transport)
     _configure(transport_obj, transport)
     _gate(wait_for, wait_timeout, paused, transport_obj)  # the options alone, before the world is built
-    if paused and transport_obj is None:
+    if paused and transport_obj is None and not viewer:
         raise _fail([f"--paused needs a transport that can resume the simulation, and '{DEFAULT_TRANSPORT}' "
-                     "cannot start here (see the line above)"])
-    rtf = _pace(fast, realtime, factor, transport_obj is not None)
-    if duration is None and steps is None and transport_obj is None:
+                     "cannot start here (see the line above); --viewer can resume it too"])
+    interactive = transport_obj is not None or viewer
+    rtf = _pace(fast, realtime, factor, interactive)
+    if duration is None and steps is None and not interactive:
         duration = 10.0
         err.print("no --duration or --steps: running 10 simulated seconds")
     missing = [str(p) for p in worlds or [] if not p.exists()]
@@ -298,6 +330,7 @@ def run(
     sim.world_sources = list(worlds or [])
     _check_endpoints(transport_obj, sim)
     gate = _gate(wait_for, wait_timeout, paused, transport_obj, sim)
+    viewer_obj = _viewer(viewer, viewer_host, viewer_port, viewer_rate)  # listening now: a taken port is exit 2
     total = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     show_progress = not quiet and total is not None
     t0 = time.perf_counter()
@@ -315,13 +348,15 @@ def run(
             err.print(line)
 
     def started(s: Simulation) -> None:
-        if transport_obj is None:
+        if not interactive:
             return
         pace = "as fast as possible" if rtf is None else f"at {rtf:g}x real time"
         state = ("paused until the --wait-for topics have their peers" if gate is not None and gate.active else
                  "paused" if s.control.paused else f"running {pace}")
-        err.print(f"ready: transport '{transport_obj.name}' is up, {state}; Ctrl-C or SIGTERM ends the run and "
-                  "prints the results", markup=False, soft_wrap=True)
+        up = [f"transport '{transport_obj.name}'"] if transport_obj is not None else []
+        up += [f"viewer at {viewer_obj.url}"] if viewer_obj is not None else []
+        err.print(f"ready: {' and '.join(up)} {'are' if len(up) > 1 else 'is'} up, {state}; Ctrl-C or SIGTERM ends "
+                  "the run and prints the results", markup=False, soft_wrap=True)
 
     # the simulation's own control: transports pause, step and stop through it; --wait-for starts paused too
     sim.control.paused = paused or gate is not None
@@ -333,7 +368,8 @@ def run(
               f"timestep {sim.dt} s")
     try:
         report = run_sim(sim, duration=duration, steps=steps, realtime_factor=rtf,
-                         control=sim.control, transport=transport_obj, progress=progress,
+                         control=sim.control, transport=[t for t in (transport_obj, viewer_obj) if t is not None],
+                         progress=progress,
                          progress_every=2.0 if not tty else 0.25, started=started, gate=gate)
     except KeyboardInterrupt as e:  # a second signal while stopping
         raise _fail([f"interrupted{f' ({e})' if str(e) else ''}: no results"], 130) from None
@@ -367,6 +403,25 @@ def run(
         raise typer.Exit(3)  # the run could not go on (a transport or a bug), the report above says why
     if report.outcome is False:
         raise typer.Exit(1)  # the world's task failed (e.g. the referee's result is not 'succeeded')
+
+
+@app.command()
+def view(
+    world_file: WorldPath,
+    backend: Annotated[str, typer.Option(help="physics backend", callback=_check_backend)] = "mujoco",
+    transport: Annotated[str | None, typer.Option(
+        help=f"transport plugin; default '{DEFAULT_TRANSPORT}' when installed; 'none': the viewer alone")] = None,
+    controller: Controllers = None,
+    viewer_host: ViewerHost = "127.0.0.1",
+    viewer_port: ViewerPort = None,
+    viewer_rate: ViewerRate = 30.0,
+) -> None:
+    """Open a world in the web viewer, paused at t = 0: press play in the browser (= sigcore run WORLD --viewer
+    --paused). The transport (ROS 2 by default) runs beside it; Ctrl-C ends the run and prints the results."""
+    run(world_file, backend=backend, duration=None, steps=None, fast=False, realtime=False, factor=None,
+        paused=True, wait_for=None, wait_timeout=0.0, transport=transport, quiet=True, controller=controller,
+        callback_budget=CALLBACK_BUDGET, disable_slow_controllers=False, worlds=None, viewer=True,
+        viewer_host=viewer_host, viewer_port=viewer_port, viewer_rate=viewer_rate)
 
 
 @app.command()

@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from .sim.simulation import Simulation
     from .sim.spawn import Spawnable
     from .transport import Transport
+    from .viewer import Viewer
     from .world.models import World
 
 hookspec = pluggy.HookspecMarker("sigcore")
@@ -65,6 +66,16 @@ def sigcore_register_features(register: Callable[[type[Feature]], None]) -> None
 
     The class must subclass :class:`sigcore.feature.Feature` and set ``name``; a world enables it with
     ``<plugin name="NAME" attr="value" .../>`` and the simulation constructs it with those attributes.
+    """
+
+
+@hookspec
+def sigcore_register_viewers(register: Callable[[type[Viewer]], None]) -> None:
+    """Register viewers: call ``register(ViewerClass)`` for each.
+
+    The class must subclass :class:`sigcore.viewer.Viewer` and set ``name`` (e.g. ``"web"``); ``sigcore run
+    --viewer`` and ``sigcore view`` start the one called :data:`sigcore.viewer.DEFAULT_VIEWER` beside the
+    transport.
     """
 
 

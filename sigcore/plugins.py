@@ -32,12 +32,13 @@ if TYPE_CHECKING:
     from .feature import Feature
     from .sim.spawn import Spawnable
     from .transport import Transport
+    from .viewer import Viewer
 
 GROUP = "sigcore"
 """Entry-point group that plugin distributions declare."""
 DISABLE_ENV = "SIGCORE_DISABLE_PLUGIN_AUTOLOAD"
 """If set (non-empty), entry points are not loaded; plugins can still be added by :func:`register_plugin`."""
-KINDS = ("backend", "transport", "feature", "controller", "spawnable", "world")
+KINDS = ("backend", "transport", "feature", "controller", "spawnable", "world", "viewer")
 """What a plugin can register, in the order :attr:`PluginInfo.provides` lists them."""
 _HOOKS = {kind: f"sigcore_register_{kind}s" for kind in KINDS}
 _SPECS = sorted(name for name in vars(hookspecs) if name.startswith("sigcore_"))
@@ -59,8 +60,8 @@ class PluginInfo:
         error: Why the plugin is disabled (where it failed, ``Type: message``), or ``None`` if it loaded.
         module: The entry point's target (``package`` or ``package.module:attr``) or the object's module.
         provides: Names in effect by kind (``backend``, ``transport``, ``feature``, ``controller``,
-            ``spawnable``, ``world``: a world file's or folder's path); a name that another plugin registered first is
-            left out (a warning names both).
+            ``spawnable``, ``world``: a world file's or folder's path, ``viewer``); a name that another plugin
+            registered first is left out (a warning names both).
     """
 
     name: str
@@ -281,9 +282,10 @@ def _registrar(kind: str, found: list[tuple[str, Any]], plugin: str) -> Callable
     from .backend import Backend
     from .feature import Feature
     from .transport import Transport
+    from .viewer import Viewer
 
     bases: dict[str, type] = {"backend": Backend, "transport": Transport, "feature": Feature,
-                              "controller": Controller}
+                              "controller": Controller, "viewer": Viewer}
     if kind == "spawnable":
         return _spawnable_registrar(found, plugin)
     if kind == "world":
@@ -452,6 +454,16 @@ def get_backend(name: str) -> type[Backend]:
 def get_transport(name: str) -> type[Transport]:
     """The transport class called ``name``; :class:`PluginError` listing the valid ones otherwise."""
     return _get("transport", name)
+
+
+def viewers() -> dict[str, type[Viewer]]:
+    """Registered viewer classes by name (``sigcore run --viewer``, ``sigcore view``)."""
+    return dict(_registry("viewer"))
+
+
+def get_viewer(name: str) -> type[Viewer]:
+    """The viewer class called ``name``; :class:`PluginError` listing the valid ones otherwise."""
+    return _get("viewer", name)
 
 
 def get_feature(name: str) -> type[Feature]:

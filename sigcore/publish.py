@@ -37,6 +37,14 @@ QosClass = Literal["state", "sensor", "events", "latched", "tf"]
 - ``tf``: transforms (``tf2_msgs/msg/TFMessage``), merged into the transport's ``/tf``.
 """
 
+DisplayKind = Literal["value", "log", "result"]
+"""How a viewer shows a publication (``Publication.display``):
+
+- ``value``: one line that always shows the latest value (a score);
+- ``log``: one line per value, appended to a list (scored events);
+- ``result``: a banner with the value, shown once it arrives (the task's result at the end).
+"""
+
 QOS_CLASSES: tuple[str, ...] = ("state", "sensor", "events", "latched", "tf")
 _SHARED = ("tf",)
 """Classes of topics several declarers may share (``/tf``: each adds its own transforms)."""
@@ -63,6 +71,9 @@ class Publication:
         agent: The agent it belongs to (per-agent endpoints of the API table), else empty.
         model: The pydantic model defining a ``sigcore_msgs`` type (generated into the interface package), or None
             for a standard type.
+        display: How a viewer shows it (:data:`DisplayKind`); None: a viewer does not show it as text.
+        display_format: The line a viewer shows, a :meth:`str.format` template over the value's fields (e.g.
+            ``"score: {data}"``); empty: ``topic: field=value ...``.
     """
 
     topic: str
@@ -72,6 +83,8 @@ class Publication:
     origin: str = "sigcore"
     agent: str = ""
     model: type[BaseModel] | None = field(default=None, compare=False)
+    display: DisplayKind | None = None
+    display_format: str = ""
 
     def __post_init__(self) -> None:
         if not _TOPIC.match(self.topic):
@@ -82,6 +95,20 @@ class Publication:
                                    "sigcore_msgs type name (CamelCase)")
         if self.qos not in QOS_CLASSES:
             raise PublicationError(f"qos {self.qos!r} of {self.topic!r} is not one of {', '.join(QOS_CLASSES)}")
+        if self.display not in (None, "value", "log", "result"):
+            raise PublicationError(f"display {self.display!r} of {self.topic!r} is not one of value, log, result "
+                                   "(or None)")
+
+    def display_text(self, value: dict[str, Any]) -> str:
+        """The line a viewer shows for ``value``: :attr:`display_format` filled with its fields, or
+        ``topic: field=value ...``; a template that does not fit the value falls back to the latter."""
+        if self.display_format:
+            try:
+                return self.display_format.format(**value)
+            except (KeyError, IndexError, ValueError, TypeError, AttributeError):
+                pass
+        fields = " ".join(f"{k}={v}" for k, v in value.items() if not isinstance(v, (list, tuple, dict)))
+        return f"{self.topic}: {fields}"
 
     @property
     def latched(self) -> bool:

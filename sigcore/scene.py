@@ -210,6 +210,12 @@ class Scene:
             self.entities.pop(name, None)
             self._parts.pop(name, None)
 
+    def frame_parts(self, name: str) -> dict[str, str | None]:
+        """Every frame of entity ``name`` -> the part whose pose the backend gives for it: a robot's link frames
+        (its root link: None), an object's or a human's own frame (None). ``backend.get_pose(name, part)`` is the
+        frame's pose in ``world``."""
+        return dict(self._parts.get(name, {name: None}))
+
     def add_observer(self, observer: Callable[[Scene], None]) -> None:
         """Call ``observer(scene)`` after every :meth:`changed` (e.g. to republish ``/sigcore/scene``)."""
         self._observers.append(observer)

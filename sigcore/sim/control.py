@@ -24,6 +24,9 @@ class RunControl:
         stop: End the run after the current step; the run reports what it did.
         reset: Restore the world's initial state before the next step.
         stop_reason: Who asked to stop, when known (``"SIGINT"``, ``"SIGTERM"``; see :meth:`request_stop`).
+        realtime_factor: The pace: simulated seconds per wall second (1.0: real time), None: as fast as possible.
+            :func:`sigcore.sim.run` sets it from its argument and reads it at every step, so a viewer changes the
+            pace while running.
     """
 
     paused: bool = False
@@ -32,6 +35,7 @@ class RunControl:
     stop: bool = False
     reset: bool = False
     stop_reason: str | None = None
+    realtime_factor: float | None = None
 
     def request_stop(self, reason: str) -> None:
         """Ask the loop to end after the current step; the first ``reason`` given is kept."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import time as _time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from contextlib import nullcontext
 from dataclasses import dataclass, field
 
@@ -68,7 +68,7 @@ class RunReport:
 
 def run(sim: Simulation, *, duration: float | None = None, steps: int | None = None,
         realtime_factor: float | None = None, control: RunControl | None = None,
-        transport: Transport | None = None, progress: Callable[[Simulation], None] | None = None,
+        transport: Transport | Sequence[Transport] | None = None, progress: Callable[[Simulation], None] | None = None,
         progress_every: float = 0.5, started: Callable[[Simulation], None] | None = None,
         handle_signals: bool = True, gate: StartGate | None = None) -> RunReport:
     """Run ``sim`` until ``duration`` simulated seconds or ``steps`` steps have passed (or ``control.stop``).
@@ -85,9 +85,12 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         sim: The simulation.
         duration: Simulated seconds to run [s]; None with ``steps`` None runs until stopped.
         steps: Number of steps to run (wins over ``duration``).
-        realtime_factor: None for as fast as possible; 1.0 for real time; 2.0 for twice real time.
+        realtime_factor: None for as fast as possible; 1.0 for real time; 2.0 for twice real time (the start value
+            of ``control.realtime_factor``, which a viewer may change while running).
         control: Pause / lockstep / step-N / stop requests (default: ``sim.control``, which transports change).
-        transport: Serviced between steps (never during one).
+        transport: Serviced between steps (never during one); several (a transport and a viewer) are started in
+            order, serviced in order (the first waits while the simulation is idle, the others are polled) and
+            stopped in reverse order.
         progress: Called about every ``progress_every`` wall seconds.
         progress_every: Wall seconds between progress calls [s].
         started: Called once the simulation and the transport have started, before the first step.
@@ -96,6 +99,8 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
             between steps while active; needs ``transport``.
     """
     control = control or sim.control
+    control.realtime_factor = realtime_factor
+    transports = [] if transport is None else [transport] if isinstance(transport, Transport) else list(transport)
     target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     start_step, start_time = sim.elapsed_steps, sim.elapsed_time  # a world loaded while running starts at step 0
     with stop_on_signals(control) if handle_signals else nullcontext():
@@ -104,16 +109,10 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
             error = None
             wall0 = _time.perf_counter()
             try:
-                if transport is not None:
-                    transport.start(sim)
-                try:
+                with _started(transports, sim):
                     if started is not None:
                         started(sim)
-                    wall = _loop(sim, target, start_step, realtime_factor, control, transport, progress,
-                                 progress_every, gate)
-                finally:
-                    if transport is not None:
-                        transport.stop()
+                    wall = _loop(sim, target, start_step, control, transports, progress, progress_every, gate)
             except USER_ERRORS as e:  # not user code (that is contained where it is called): a transport or a bug
                 error = describe(e)
                 log.error("the run stopped at t=%.3f s: %s", sim.time, error, exc_info=True)
@@ -130,19 +129,55 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
                      list(sim.dispatch.slow.values()), lines, outcome, error)
 
 
-def _loop(sim: Simulation, target: int | None, start_step: int, realtime_factor: float | None, control: RunControl,
-          transport: Transport | None, progress: Callable[[Simulation], None] | None, progress_every: float,
+class _started:
+    """Start ``transports`` in order; stop those started, in reverse order, however the block ends."""
+
+    def __init__(self, transports: list[Transport], sim: Simulation) -> None:
+        self.transports, self.sim = transports, sim
+        self.up: list[Transport] = []
+
+    def __enter__(self) -> None:
+        try:
+            for t in self.transports:
+                t.start(self.sim)
+                self.up.append(t)
+        except BaseException:
+            self.__exit__()
+            raise
+
+    def __exit__(self, *exc: object) -> None:
+        error: BaseException | None = None
+        for t in reversed(self.up):
+            try:
+                t.stop()
+            except BaseException as e:  # the others are still stopped; the first error is raised
+                error = error or e
+        self.up = []
+        if error is not None:
+            raise error
+
+
+def _loop(sim: Simulation, target: int | None, start_step: int, control: RunControl, transports: list[Transport],
+          progress: Callable[[Simulation], None] | None, progress_every: float,
           gate: StartGate | None = None) -> float:
     """Step until ``target`` steps or a stop request; the wall-clock time the stepping took [s]."""
     wall0 = _time.perf_counter()
     pace_time, pace_wall = sim.time, wall0  # real-time pacing reference, moved on while paused
+    realtime_factor = control.realtime_factor
     next_progress = wall0 + progress_every
+    transport = transports[0] if transports else None
+    others = transports[1:]
     while not control.stop and (target is None or sim.elapsed_steps - start_step < target):
         if transport is not None:
             idle = control.paused or (control.lockstep and control.pending_steps == 0) or not sim.loaded
             transport.service(0.01 if idle else 0.0)
+            for other in others:
+                other.service(0.0)
             if gate is not None and gate.active:
                 gate.poll(control, transport)
+        if control.realtime_factor != realtime_factor:  # a viewer changed the pace: no catching up
+            realtime_factor = control.realtime_factor
+            pace_time, pace_wall = sim.time, _time.perf_counter()
         if control.reset:
             control.reset = False
             sim.reset()

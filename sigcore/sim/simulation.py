@@ -95,6 +95,8 @@ class Simulation:
         """Called after every spawn and delete, once the core's state is consistent (transports, viewers)."""
         self.world_observers: list[Callable[[WorldChange], None]] = []
         """Called before a world is unloaded and after one is loaded (:meth:`load_world`, :meth:`unload_world`)."""
+        self.reset_observers: list[Callable[[], None]] = []
+        """Called by :meth:`reset` once the core's state is restored, before the features reset (viewers)."""
         self.world_sources: list[Path] = []
         """World files and folders :meth:`available_worlds` lists besides ``worlds/`` (``sigcore run --worlds``)."""
         self.loaded = True
@@ -890,6 +892,8 @@ class Simulation:
             odo.reset()
         for drive in self._drives.values():
             drive.reset()
+        for observer in list(self.reset_observers):
+            observer()
         for name, feature in self.features.items():
             if name not in self.feature_guard.disabled:
                 try:

@@ -45,12 +45,14 @@ class RefereeTopics:
         self.referee = referee
         declare = referee.sim.publications.declare
         self._score = declare(Publication(SCORE, "std_msgs/msg/Int32", "latched", "the referee's current total",
-                                          "referee"))
+                                          "referee", display="value", display_format="score: {data}"))
         self._events = declare(Publication(EVENTS, "RefereeEvent", "events", "each scored event as it happens",
-                                           "referee", model=EventMsg))
+                                           "referee", model=EventMsg, display="log",
+                                           display_format="{time:7.2f} s  {points:+5d}  {text}"))
         self._result = declare(Publication(RESULT, "RefereeResult", "latched",
                                            "the result and the score table, once the task has ended", "referee",
-                                           model=ResultMsg))
+                                           model=ResultMsg, display="result",
+                                           display_format="{result}: score {score} after {time:.1f} s"))
         referee.observers.append(self.on_event)
         self.publish_score()
 

@@ -1,0 +1,142 @@
+"""A headless Chromium showing a viewer page, driven like a person would: for tests, benches and screenshots.
+
+Needs Debian's ``chromium`` and ``chromium-driver`` (``scripts/setup.sh`` installs them as root) and ``selenium``
+(the test extra). Chromium renders WebGL in software (SwiftShader) here: the first picture takes about 10 s.
+"""
+
+from __future__ import annotations
+
+import io
+import shutil
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sigcore.errors import SigcoreError
+
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMEDRIVER = Path("/usr/bin/chromedriver")
+FLAGS = ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run",
+         "--enable-unsafe-swiftshader")
+
+
+class BrowserMissing(SigcoreError, RuntimeError):
+    """Chromium, its driver or selenium is not installed; the message says what to install."""
+
+
+def missing() -> str | None:
+    """What is missing to drive a browser here (the command that installs it), or None."""
+    if not CHROMIUM.exists() or not CHROMEDRIVER.exists():
+        return "chromium and chromium-driver are not installed (as root: apt-get install -y chromium chromium-driver)"
+    try:
+        import selenium  # noqa: F401
+    except ImportError:
+        return "selenium is not installed (pip install selenium, or pip install -e '.[test]')"
+    return None
+
+
+class Browser:
+    """One headless Chromium window at ``url`` (``width`` x ``height`` pixels); :meth:`close` ends it.
+
+    Raises:
+        BrowserMissing: what is missing (see :func:`missing`).
+    """
+
+    def __init__(self, url: str, width: int = 1280, height: int = 800) -> None:
+        why = missing()
+        if why is not None:
+            raise BrowserMissing(why)
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+
+        self._closed = False
+        self._profile = tempfile.mkdtemp(prefix="sigcore-browser-")
+        options = webdriver.ChromeOptions()
+        for flag in (*FLAGS, f"--window-size={width},{height}", f"--user-data-dir={self._profile}"):
+            options.add_argument(flag)
+        self.driver: Any = webdriver.Chrome(service=Service(str(CHROMEDRIVER)), options=options)
+        self.driver.set_page_load_timeout(60)
+        self.driver.get(url)
+
+    def close(self) -> None:
+        """Quit the browser and remove its profile (again: nothing)."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self.driver.quit()
+        finally:
+            shutil.rmtree(self._profile, ignore_errors=True)
+
+    def __enter__(self) -> Browser:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ looking
+    def screenshot(self) -> np.ndarray:
+        """The page as an (h, w, 3) uint8 RGB array."""
+        from PIL import Image
+
+        png = self.driver.get_screenshot_as_png()
+        return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
+
+    def save(self, path: Path) -> None:
+        """Write the page as a PNG file."""
+        self.driver.save_screenshot(str(path))
+
+    def text(self) -> str:
+        """All the text of the page."""
+        return str(self.driver.find_element("tag name", "body").text)
+
+    def wait(self, predicate: Any, timeout: float, what: str) -> Any:
+        """Poll ``predicate(self)`` every 0.2 s until it returns something (not None, False or empty);
+        AssertionError naming ``what`` after ``timeout`` [s]."""
+        end = time.monotonic() + timeout
+        while True:
+            value = predicate(self)
+            if value is not None and value is not False and (not hasattr(value, "__len__") or len(value) > 0):
+                return value
+            if time.monotonic() > end:
+                raise AssertionError(f"after {timeout:g} s: {what}; the page says:\n{self.text()[-1500:]}")
+            time.sleep(0.2)
+
+    def dismiss_notifications(self) -> None:
+        """Close the notes viser shows over the scene (e.g. "Software WebGL rendering detected")."""
+        for button in self.driver.find_elements("css selector", ".mantine-Notification-closeButton"):
+            try:
+                button.click()
+            except Exception:  # gone meanwhile
+                pass
+
+    # ------------------------------------------------------------------ acting
+    def click(self, label: str) -> None:
+        """Click the button labelled ``label``."""
+        self.driver.find_element("xpath", f"//button[normalize-space()='{label}']").click()
+
+    def field(self, label: str) -> Any:
+        """The input next to the label ``label``."""
+        return self.driver.find_element(
+            "xpath", f"//label[normalize-space()='{label}']/ancestor::div[contains(@class,'mantine-Flex-root')][1]"
+                     "//input")
+
+    def type(self, label: str, text: str) -> None:
+        """Replace the text of the field labelled ``label`` by ``text``."""
+        from selenium.webdriver.common.keys import Keys
+
+        box = self.field(label)
+        box.click()
+        box.send_keys(Keys.CONTROL, "a")
+        box.send_keys(text)
+
+    def pick(self, label: str, option: str, timeout: float = 10.0) -> None:
+        """Choose ``option`` in the list labelled ``label``."""
+        self.field(label).click()
+        xpath = f"//*[@role='option'][normalize-space()='{option}']"
+        item = self.wait(lambda b: b.driver.find_elements("xpath", xpath), timeout, f"option {option!r} of {label}")
+        item[0].click()

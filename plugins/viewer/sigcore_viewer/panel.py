@@ -1,0 +1,157 @@
+"""The viewer's side panel: the run's controls, the task's score and events, messages to agents, the selected
+entity, the overlays. Its callbacks (viser's threads) only queue commands; :meth:`Panel.update` (the push thread)
+shows a snapshot. One panel is shared by every browser: they all see and steer the same run."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import viewer as v
+
+if TYPE_CHECKING:
+    from .viewer import Command, Snapshot
+
+NONE = "(none)"
+
+
+class Panel:
+    """Builds the GUI on ``server`` and posts the person's commands with ``post``.
+
+    Args:
+        server: The viser server.
+        post: Queues a command for the simulation thread.
+        overlays: The viewer's overlay switches (changed here, read by the snapshot).
+    """
+
+    def __init__(self, server: Any, post: Callable[[Command], None], overlays: dict[str, bool]) -> None:
+        gui = server.gui
+        self._server = server
+        self._post = post
+        self._overlays = overlays
+        self._texts: dict[str, str] = {}
+        self._options: dict[str, tuple[str, ...]] = {}
+        self._drag: Any = None
+        self._drag_name: str | None = None
+        self._images: dict[str, Any] = {}
+
+        self.notes = gui.add_markdown("")
+        with gui.add_folder("Run"):
+            self.status = gui.add_markdown("starting")
+            self.play = gui.add_button("Play", hint="run the simulation")
+            self.pause = gui.add_button("Pause", hint="pause the simulation")
+            self.steps = gui.add_number("Steps", initial_value=100, min=1, max=100000, step=1)
+            self.step = gui.add_button("Step", hint="pause, then advance this many steps")
+            self.reset = gui.add_button("Reset", hint="put the world back as it was at the start")
+            self.pace = gui.add_dropdown("Pace", tuple(v.PACES), initial_value="real time")
+        with gui.add_folder("Task"):
+            self.result = gui.add_markdown("")
+            self.score = gui.add_markdown("")
+            self.events = gui.add_markdown("")
+        with gui.add_folder("Message"):
+            self.to = gui.add_dropdown("To", (NONE,), initial_value=NONE)
+            self.message = gui.add_text("Message", initial_value="")
+            self.send = gui.add_button("Send", hint="deliver the text to the agent (on_recv_msg, <agent>_onRecvMsg)")
+        with gui.add_folder("Selection"):
+            self.entity = gui.add_dropdown("Entity", (NONE,), initial_value=NONE)
+            self.drag = gui.add_checkbox("Drag handle", initial_value=False,
+                                         hint="move the selected entity with a handle in the scene")
+            self.selection = gui.add_markdown("")
+        with gui.add_folder("Overlays", expand_by_default=False):
+            self.switches = {key: gui.add_checkbox(label, initial_value=overlays[key]) for key, label in (
+                ("names", "Names"), ("frames", "TF frames"), ("scan", "Lidar scans"), ("contacts", "Contacts"),
+                ("map", "Map (SLAM)"))}
+        self._cameras = gui.add_folder("Cameras", expand_by_default=False, visible=False)
+
+        self.play.on_click(lambda _e: post(v.play))
+        self.pause.on_click(lambda _e: post(v.pause))
+        self.step.on_click(lambda _e: post(v.step(self.steps.value)))
+        self.reset.on_click(lambda _e: post(v.reset))
+        self.pace.on_update(lambda _e: post(v.set_pace(self.pace.value)))
+        self.send.on_click(lambda _e: post(v.send_message("" if self.to.value == NONE else self.to.value,
+                                                         self.message.value)))
+        self.entity.on_update(lambda _e: self._entity_picked())
+        self.drag.on_update(lambda _e: self._entity_picked())
+        for key, box in self.switches.items():
+            box.on_update(lambda _e, key=key, box=box: self._overlays.__setitem__(key, bool(box.value)))
+        self._select_cb: Callable[[str], None] | None = None
+        self._move_cb: Callable[[str, np.ndarray, np.ndarray], None] | None = None
+
+    def bind(self, select: Callable[[str], None], move: Callable[[str, np.ndarray, np.ndarray], None]) -> None:
+        """What picking an entity and dragging it do (the viewer queues them as commands)."""
+        self._select_cb, self._move_cb = select, move
+
+    def _entity_picked(self) -> None:
+        name = self.entity.value
+        if name != NONE and self._select_cb is not None:
+            self._select_cb(name)
+        elif name == NONE:
+            self._hide_drag()
+
+    # ------------------------------------------------------------------ from the simulation thread
+    def selected(self, name: str, pose: tuple[np.ndarray, np.ndarray] | None) -> None:
+        """``name`` was selected: show it in the list and put the drag handle on it (if it is on)."""
+        if self.entity.value != name and name in self.entity.options:
+            self.entity.value = name
+        if not self.drag.value or pose is None:
+            self._hide_drag()
+            return
+        position, wxyz = pose
+        if self._drag is None or self._drag_name != name:
+            self._hide_drag()
+            self._drag = self._server.scene.add_transform_controls("/sigcore_drag", scale=0.4,
+                                                                   position=position, wxyz=wxyz)
+            self._drag_name = name
+            handle = self._drag
+
+            def moved(_e: Any, name: str = name) -> None:
+                if self._move_cb is not None:
+                    self._move_cb(name, np.array(handle.position), np.array(handle.wxyz))
+            handle.on_update(moved)
+        else:
+            self._drag.position, self._drag.wxyz = position, wxyz
+
+    def _hide_drag(self) -> None:
+        if self._drag is not None:
+            self._drag.remove()
+            self._drag, self._drag_name = None, None
+
+    # ------------------------------------------------------------------ from the push thread
+    def update(self, snap: Snapshot) -> None:
+        """Show ``snap``'s texts, lists and images (only what changed is sent)."""
+        self._text(self.status, "status", snap.status)
+        self._text(self.notes, "notes", snap.texts["notes"])
+        self._text(self.score, "score", snap.texts["score"])
+        self._text(self.events, "events", "**events**  \n" + snap.texts["events"])
+        result = snap.texts["result"]
+        self._text(self.result, "result", f"### {result}" if result else "")
+        self._text(self.selection, "selection", snap.texts["selection"])
+        if self._texts.get("pace") != snap.pace:  # the pace the run has (the command line's, another browser's)
+            self._texts["pace"] = snap.pace
+            if snap.pace in self.pace.options and self.pace.value != snap.pace:
+                self.pace.value = snap.pace
+        self._list(self.to, "to", snap.agents)
+        self._list(self.entity, "entity", [NONE, *snap.entities])
+        if snap.images:
+            self._cameras.visible = True
+            for topic, image in snap.images.items():
+                if topic in self._images:
+                    self._images[topic].image = image
+                else:
+                    with self._cameras:
+                        self._images[topic] = self._server.gui.add_image(image, label=topic)
+
+    def _text(self, handle: Any, key: str, text: str) -> None:
+        if self._texts.get(key) != text:
+            self._texts[key] = text
+            handle.content = text
+
+    def _list(self, handle: Any, key: str, names: list[str]) -> None:
+        options = tuple(names) if names else (NONE,)
+        if self._options.get(key) != options:
+            self._options[key] = options
+            keep = handle.value if handle.value in options else options[0]
+            handle.options = options
+            handle.value = keep

@@ -1,0 +1,382 @@
+"""The web viewer in-process, without a browser: a person's commands, the snapshots it pushes, its port, a run.
+
+Each test starts a real :class:`WebViewer` (a viser server on a free port) on a real MuJoCo simulation and drives it
+in lockstep from the test thread, which plays the simulation thread: it services the viewer and steps, as the loop
+of :func:`sigcore.sim.run` does. Commands are queued as the panel queues them (``_post``) and run at the next
+service; what the push thread sent is read through ``push_observers``.
+"""
+
+from __future__ import annotations
+
+import math
+import socket
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+from sigcore_viewer import viewer as v
+from sigcore_viewer.scenebuild import SceneLayout
+from sigcore_viewer.viewer import Snapshot, WebViewer
+
+from sigcore.agent.events import Message
+from sigcore.publish import Publication
+from sigcore.sim import Simulation, run
+from sigcore.viewer import DEFAULT_PORT, VIEWER_SENDER, ViewerError
+from sigcore.world import World, parse_world
+
+ROOT = Path(__file__).resolve().parents[2]
+CLEANUP = ROOT / "worlds" / "cleanup.xml"
+TIMEOUT = 10.0
+"""Wall seconds a snapshot may take to be taken and pushed (it takes milliseconds; generous for a loaded CI)."""
+
+
+def free_port() -> int:
+    """A port the OS says is free now (outside 8080..8179, where a viewer started with port=None looks)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def port_of(viewer: WebViewer) -> int:
+    """The port in the viewer's URL."""
+    return int(viewer.url.rsplit(":", 1)[1])
+
+
+class Lockstep:
+    """A started viewer on ``sim``, driven from the test thread, and the snapshots its push thread sent.
+
+    Args:
+        sim: The simulation.
+        viewer: The viewer, already started on ``sim``.
+    """
+
+    def __init__(self, sim: Simulation, viewer: WebViewer) -> None:
+        self.sim = sim
+        self.viewer = viewer
+        self.pushed: list[Snapshot] = []
+        viewer.push_observers.append(self.pushed.append)  # list.append: safe from the push thread
+
+    def tick(self) -> bool:
+        """One pass of the run loop: service the viewer, apply a reset it asked for, step unless paused.
+
+        Returns:
+            Whether the simulation stepped.
+        """
+        self.viewer.service(0.0)
+        control = self.sim.control
+        if control.reset:
+            control.reset = False
+            self.sim.reset()
+        if control.paused or control.lockstep:
+            if control.pending_steps <= 0:
+                return False
+            control.pending_steps -= 1
+        self.sim.step()
+        return True
+
+    def show(self) -> Snapshot:
+        """Service the viewer (no step) until it takes a snapshot, and return that snapshot once pushed."""
+        since = time.perf_counter()
+        deadline = since + TIMEOUT
+        while time.perf_counter() < deadline:
+            self.viewer.service(0.0)
+            if self.pushed and self.pushed[-1].wall >= since:
+                return self.pushed[-1]
+            time.sleep(0.002)
+        pytest.fail(f"no snapshot was pushed within {TIMEOUT} s")
+
+    def run(self, command: v.Command) -> Snapshot:
+        """Queue ``command`` as the panel does; the snapshot that shows its effect (a command forces one)."""
+        self.viewer._post(command)
+        return self.show()
+
+    def layout(self) -> SceneLayout:
+        """The newest layout pushed (the first snapshot always carries one)."""
+        return next(s.layout for s in reversed(self.pushed) if s.layout is not None)
+
+
+def newest_note(snap: Snapshot) -> str:
+    """The newest note of ``snap`` without its ``t = ... s:`` stamp (notes are shown newest first)."""
+    first = snap.texts["notes"].split("  \n")[0]
+    stamp, _, text = first.partition(": ")
+    assert stamp.startswith("t = "), first
+    return text
+
+
+@pytest.fixture(scope="module")
+def cleanup_world() -> World:
+    """The clean-up world (robot_000, static tables, can_0 on table_0, the referee), parsed once."""
+    return parse_world(CLEANUP)
+
+
+@pytest.fixture
+def cleanup(cleanup_world: World) -> Simulation:
+    """A fresh simulation of the clean-up world on MuJoCo."""
+    return Simulation(cleanup_world, "mujoco")
+
+
+@pytest.fixture
+def viewers() -> Iterator[Callable[..., WebViewer]]:
+    """Makes viewers; every one made is stopped at the end of the test, however it ends."""
+    made: list[WebViewer] = []
+
+    def make(port: int | None, rate: float = 30.0) -> WebViewer:
+        viewer = WebViewer(port=port, rate=rate)
+        made.append(viewer)
+        return viewer
+
+    yield make
+    for viewer in made:
+        viewer.stop()
+
+
+@pytest.fixture
+def lockstep(viewers: Callable[..., WebViewer]) -> Callable[[Simulation], Lockstep]:
+    """Starts a viewer on a free port on a simulation and returns its lockstep driver."""
+    def start(sim: Simulation) -> Lockstep:
+        viewer = viewers(free_port())
+        viewer.open()
+        viewer.start(sim)
+        return Lockstep(sim, viewer)
+    return start
+
+
+# ------------------------------------------------------------------ the run's controls
+def test_pause_step_n_and_play(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """Pause holds the simulation; step(5) queues exactly 5 steps; a bad count is a note naming 1..100000 that
+    changes nothing; play runs on."""
+    lock = lockstep(cleanup)
+    control = cleanup.control
+    snap = lock.run(v.pause)
+    assert control.paused and snap.status.startswith("**paused**")
+    assert not lock.tick()
+    lock.run(v.step(5))
+    assert (control.paused, control.pending_steps) == (True, 5)
+    for bad, shown in (("abc", "'abc'"), (0, "0"), (10**6, "1000000")):
+        snap = lock.run(v.step(bad))
+        assert newest_note(snap) == f"steps must be a whole number from 1 to 100000, got {shown}"
+        assert (control.paused, control.pending_steps) == (True, 5)
+    before = cleanup.elapsed_steps
+    assert [lock.tick() for _ in range(7)] == [True] * 5 + [False] * 2
+    assert cleanup.elapsed_steps == before + 5
+    snap = lock.run(v.play)
+    assert not control.paused and snap.status.startswith("**running")
+    assert lock.tick() and lock.tick()
+
+
+def test_pace(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """A pace sets control.realtime_factor (2x: 2.0; as fast as possible: None); an unknown one is a note listing
+    every valid pace and changes nothing."""
+    lock = lockstep(cleanup)
+    control = cleanup.control
+    snap = lock.run(v.set_pace("2x"))
+    assert control.realtime_factor == 2.0 and "running (2x)" in snap.status
+    lock.run(v.set_pace("as fast as possible"))
+    assert control.realtime_factor is None
+    snap = lock.run(v.set_pace("3x"))
+    assert control.realtime_factor is None
+    note = newest_note(snap)
+    assert note.startswith("unknown pace '3x'; valid: ")
+    assert all(name in note for name in v.PACES)
+
+
+# ------------------------------------------------------------------ messages
+def test_message_reaches_the_agent(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """A message from the viewer reaches the agent before the next step, sent by "viewer"; one to a missing agent
+    or with no text is a note, nothing is delivered, and the simulation steps on."""
+    lock = lockstep(cleanup)
+    received: list[Message] = []
+    cleanup.message_observers.append(received.append)
+    snap = lock.run(v.send_message("robot_000", "hello"))
+    assert newest_note(snap) == "sent to robot_000: hello"
+    assert received == []  # queued: delivered before the next step
+    assert lock.tick()
+    assert [(m.sender, m.to, m.content) for m in received] == [(VIEWER_SENDER, "robot_000", "hello")]
+    assert VIEWER_SENDER == "viewer"
+
+    snap = lock.run(v.send_message("ghost", "hello"))
+    note = newest_note(snap)
+    assert note.startswith("agent 'ghost' no longer exists: the message was not sent; agents: ")
+    assert all(name in note for name in cleanup.agents)
+    snap = lock.run(v.send_message("robot_000", "   "))
+    assert newest_note(snap) == "type a message first"
+    before = cleanup.elapsed_steps
+    assert lock.tick() and lock.tick()
+    assert cleanup.elapsed_steps == before + 2
+    assert len(received) == 1
+
+
+# ------------------------------------------------------------------ moving and resetting
+def test_move_entity(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """Dragging can_0 teleports it at once (pose read back before any step, in the snapshot and in viser's scene
+    node of its frame); table_0 is static: a note says so and its pose is unchanged."""
+    lock = lockstep(cleanup)
+    target, wxyz = np.array([-1.0, 0.3, 0.5]), np.array([math.cos(0.3), 0.0, 0.0, math.sin(0.3)])
+    steps = cleanup.elapsed_steps
+    snap = lock.run(v.move_entity("can_0", target, wxyz))
+    assert cleanup.elapsed_steps == steps
+    pos, quat = cleanup.backend.get_pose("can_0")
+    np.testing.assert_allclose(pos, target, atol=1e-6)
+    np.testing.assert_allclose(quat, wxyz, atol=1e-6)
+    index = lock.layout().parts.index(("can_0", None))
+    np.testing.assert_allclose(snap.poses[index], np.concatenate([target, wxyz]), atol=1e-6)
+    node = lock.viewer._server.scene.get_handle_by_name(f"/sigcore/f{index}")  # what viser sends the browsers
+    np.testing.assert_allclose(np.concatenate([node.position, node.wxyz]), np.concatenate([target, wxyz]),
+                               atol=1e-6)
+
+    table_pos, table_quat = (np.array(a) for a in cleanup.backend.get_pose("table_0"))
+    snap = lock.run(v.move_entity("table_0", target, wxyz))
+    assert newest_note(snap).startswith("table_0 is static (fixed in place): it cannot be dragged")
+    pos, quat = cleanup.backend.get_pose("table_0")
+    assert np.array_equal(pos, table_pos) and np.array_equal(quat, table_quat)
+
+
+def test_reset_during_a_grasp(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """Reset while robot_000 holds can_0: the note names the released object; at the next pass of the loop the
+    grasp is gone, the can is back where it started and the page no longer shows the old trial's events."""
+    lock = lockstep(cleanup)
+    start = np.array(cleanup.backend.get_pose("can_0")[0])
+    robot = cleanup.robot("robot_000")
+    cleanup.agents["can_0"].set_position(robot.part_position("l_hand_link"))
+    robot.grasp("l_hand_link", "can_0")
+    assert lock.tick()
+    assert cleanup.grasps.items() == [("robot_000", "l_hand_link", "can_0")]
+    for _ in range(500):  # the referee scores the grasp within its check period (deterministic: in steps)
+        if "robot_000 grasped can_0" in lock.show().texts["events"]:
+            break
+        assert lock.tick()
+    assert "robot_000 grasped can_0" in lock.show().texts["events"]
+    snap = lock.run(v.reset)
+    assert newest_note(snap) == "reset to the start: robot_000 let go of can_0"
+    assert cleanup.control.reset  # done by the run loop, between two steps
+    assert lock.tick()
+    assert not cleanup.control.reset
+    assert cleanup.grasps.items() == []
+    np.testing.assert_allclose(cleanup.backend.get_pose("can_0")[0], start, atol=1e-3)
+    after = lock.show()  # the old trial's events are gone with it (reset_observers); the score is the new one's
+    assert after.texts["events"] == "no events yet" and after.texts["score"] == "score: 0"
+
+
+# ------------------------------------------------------------------ what is shown
+def test_snapshot_shows_every_entity_the_status_and_the_score(
+        cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """The first pushed snapshot carries a layout with a root frame per entity; poses are finite unit-quaternion
+    poses equal to the backend's; the status names the world and the step; the referee's score reads "score: 0"."""
+    lock = lockstep(cleanup)
+    for _ in range(10):
+        assert lock.tick()
+    snap = lock.show()
+    layout = lock.pushed[0].layout
+    assert layout is not None
+    assert [entity for entity, part in layout.parts if part is None] == list(cleanup.entity_names)
+    assert len(set(layout.frames)) == len(layout.frames) == snap.poses.shape[0]
+    assert np.isfinite(snap.poses).all()
+    np.testing.assert_allclose(np.linalg.norm(snap.poses[:, 3:], axis=1), 1.0, atol=1e-6)
+    for i, (entity, part) in enumerate(layout.parts):
+        pos, quat = cleanup.backend.get_pose(entity, part)
+        np.testing.assert_allclose(snap.poses[i], np.concatenate([pos, quat]), atol=1e-9)
+    assert snap.step == 10
+    assert "world `cleanup`" in snap.status and " step 10 " in snap.status
+    assert snap.texts["score"] == "score: 0"
+    assert snap.agents == list(cleanup.agents) and snap.entities == list(cleanup.entity_names)
+
+
+def test_log_publication_is_shown(sim: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """A publication declared with display="log" shows each value as a line of the events, newest first, through
+    its template; a value the template does not fit falls back to "topic: field=value"."""
+    lock = lockstep(sim)
+    assert lock.show().texts["events"] == "no events yet"
+    publisher = sim.publications.declare(Publication("/test/log", "std_msgs/msg/String", "events", display="log",
+                                                     display_format="got {data}"))
+    publisher.publish({"data": "first"})
+    assert lock.tick()
+    publisher.publish({"data": "second"})
+    publisher.publish({"other": 7})
+    snap = lock.show()
+    assert snap.texts["events"].split("  \n") == ["/test/log: other=7", "got second", "got first"]
+    assert "world `coretest`" in snap.status
+
+
+def test_failing_command_is_a_note(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """A command that raises becomes a note naming the error; the simulation keeps stepping."""
+    lock = lockstep(cleanup)
+    assert lock.tick()
+    def broken(sim: Simulation) -> str | None:
+        raise ZeroDivisionError("division by zero")
+    snap = lock.run(broken)
+    assert newest_note(snap) == "that did not work: ZeroDivisionError: division by zero"
+    before = cleanup.elapsed_steps
+    assert [lock.tick() for _ in range(3)] == [True] * 3
+    assert cleanup.elapsed_steps == before + 3
+
+
+# ------------------------------------------------------------------ the server
+def test_taken_port_is_refused(viewers: Callable[..., WebViewer]) -> None:
+    """An explicit port another program listens on is refused with ViewerError naming the port."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        port = s.getsockname()[1]
+        viewer = viewers(port)
+        with pytest.raises(ViewerError, match=f"port {port} on 127.0.0.1 is in use by another program"):
+            viewer.open()
+    with pytest.raises(ViewerError, match="not open yet"):
+        viewer.url  # noqa: B018 - the property raises
+
+
+def test_default_port_taken_takes_the_next(viewers: Callable[..., WebViewer]) -> None:
+    """With no port given and 8080 taken, the viewer listens on a later port, and its URL says which."""
+    blocker = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        try:
+            blocker.bind(("127.0.0.1", DEFAULT_PORT))
+            blocker.listen()
+        except OSError:
+            pass  # another program holds 8080 already: the case under test all the same
+        viewer = viewers(None)
+        viewer.open()
+        port = port_of(viewer)
+        assert port > DEFAULT_PORT
+        assert viewer.url == f"http://127.0.0.1:{port}"
+        with socket.create_connection(("127.0.0.1", port), timeout=TIMEOUT):
+            pass  # the viewer listens there
+    finally:
+        blocker.close()
+
+
+@pytest.mark.parametrize(("kwargs", "valid"), [
+    ({"rate": 0}, r"valid: 0 < rate <= 120"),
+    ({"rate": 1000}, r"valid: 0 < rate <= 120"),
+    ({"rate": float("nan")}, r"valid: 0 < rate <= 120"),
+    ({"port": 70000}, r"valid: 1\.\.65535"),
+    ({"port": 0}, r"valid: 1\.\.65535"),
+])
+def test_out_of_range_arguments_are_refused(kwargs: dict[str, float], valid: str) -> None:
+    """A rate outside (0, 120] Hz or a port outside 1..65535 is refused with the valid range."""
+    with pytest.raises(ViewerError, match=valid):
+        WebViewer(**kwargs)  # type: ignore[arg-type]
+
+
+def test_run_services_the_viewer_and_frees_its_port(cleanup: Simulation,
+                                                    viewers: Callable[..., WebViewer]) -> None:
+    """sigcore.sim.run with the viewer as its transport runs all 200 steps, services the viewer between steps
+    (a command queued at step 100 runs before step 101) and stops its server: the port is free again."""
+    port = free_port()
+    viewer = viewers(port)
+    ran: list[int] = []
+
+    def at_step_100(sim: Simulation) -> None:
+        if sim.elapsed_steps == 100:
+            viewer._post(lambda s: ran.append(s.elapsed_steps))
+
+    cleanup.add_step_observer(at_step_100)
+    report = run(cleanup, steps=200, transport=[viewer], realtime_factor=None)
+    assert (report.error, report.stopped_by, report.steps) == (None, None, 200)
+    assert ran == [100]
+    assert viewer.pushed >= 1
+    with pytest.raises(ViewerError, match="not open yet"):
+        viewer.url  # noqa: B018 - the property raises
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", port))  # raises OSError if the server still held it
