@@ -7,11 +7,13 @@ import socket
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 from sigcore_viewer.viewer import Snapshot, WebViewer
 
+from sigcore.geometry import quat_to_matrix
 from sigcore.publish import Publication
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
@@ -132,12 +134,45 @@ def test_robot_links_are_nested_under_the_robot_and_compose_to_their_pose(
             continue
         node = scene.get_handle_by_name(f"/sigcore/f{root}/l{j}")
         assert layout.parent[j] == root
-        w, x, y, z = base.wxyz
-        rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                             [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                             [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-        position = base.position + rotation @ node.position
+        position = base.position + quat_to_matrix(base.wxyz) @ node.position
         np.testing.assert_allclose(position, sim.backend.get_pose("robot_000", part)[0], atol=2e-3)
         checked += 1
     assert checked >= 10  # sigbot's drawn links
     assert np.linalg.norm(base.position[:2] - np.array([-4.0, 0.0])) > 0.1  # it did drive
+
+
+def test_meshes_and_primitives_become_viser_nodes(tmp_path: Path) -> None:
+    """Every shape of the scene description becomes nodes: a box, a sphere, a cylinder, a capsule (cylinder and two
+    end spheres) and a mesh read with trimesh (its vertices scaled); an unreadable mesh is left out, not an error."""
+    import viser
+    from sigcore_viewer.shapes import add_visual
+
+    from sigcore.world.visuals import Visual
+
+    mug = Path(__file__).resolve().parents[1] / "data" / "worlds" / "models" / "mug.obj"
+    broken = tmp_path / "broken.obj"
+    broken.write_text("this is not a mesh\n")
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
+    try:
+        one = (1.0, 0.0, 0.0, 0.0)
+        made = {shape: add_visual(server.scene, f"/t/{shape}", Visual("f", shape, size, (0.0, 0.0, 0.0), one,
+                                                                       (1.0, 0.0, 0.0, 1.0), mesh))
+                for shape, size, mesh in (("box", (1.0, 2.0, 3.0), None), ("sphere", (0.5,), None),
+                                          ("cylinder", (0.1, 0.4), None), ("capsule", (0.1, 0.4), None),
+                                          ("mesh", (2.0, 2.0, 2.0), mug))}
+        assert {k: len(v) for k, v in made.items()} == {"box": 1, "sphere": 1, "cylinder": 1, "capsule": 3,
+                                                          "mesh": 1}
+        ends = sorted(float(h.position[2]) for h in made["capsule"][1:])
+        assert ends == pytest.approx([-0.2, 0.2])  # the end spheres at the ends of the cylinder, along z
+        import trimesh
+
+        loaded: Any = trimesh.load(str(mug), force="mesh")
+        vertices = np.asarray(loaded.vertices)
+        np.testing.assert_allclose(made["mesh"][0].vertices, vertices * 2.0, rtol=1e-5, atol=1e-6)
+        assert add_visual(server.scene, "/t/broken", Visual("f", "mesh", (1.0, 1.0, 1.0), (0.0, 0.0, 0.0), one,
+                                                            (1.0, 1.0, 1.0, 1.0), broken)) == []
+    finally:
+        server.stop()

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from sigcore.geometry import quat_mul
+from sigcore.geometry import quat_mul, quat_rotate
 from sigcore.world.visuals import Visual
 
 log = logging.getLogger("sigcore.viewer")
@@ -42,7 +42,7 @@ def add_visual(scene: Any, name: str, visual: Visual) -> list[Any]:
         out = [scene.add_cylinder(name, radius=radius, height=length, color=color, radial_segments=20,
                                   position=xyz, wxyz=along_z, opacity=opacity)]
         if visual.shape == "capsule":  # the two half-sphere ends
-            axis = _z_axis(wxyz)
+            axis = quat_rotate(wxyz, np.array([0.0, 0.0, 1.0]))
             for k, sign in ((0, 1.0), (1, -1.0)):
                 out.append(scene.add_icosphere(f"{name}_end{k}", radius=radius, color=color, subdivisions=2,
                                                position=xyz + sign * axis * length / 2, opacity=opacity))
@@ -56,11 +56,6 @@ def add_visual(scene: Any, name: str, visual: Visual) -> list[Any]:
                                       opacity=opacity)]
     log.warning("viewer: visual of shape %r is not drawn", visual.shape)
     return []
-
-
-def _z_axis(wxyz: np.ndarray) -> np.ndarray:
-    w, x, y, z = wxyz
-    return np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
 
 
 @lru_cache(maxsize=64)

@@ -30,6 +30,7 @@ import numpy as np
 from sigcore.agent.exceptions import ApiError
 from sigcore.agent.robot import RobotObj
 from sigcore.api.call import call
+from sigcore.geometry import quat_to_matrix, quat_yaw
 from sigcore.publish import Publication, PublicationSink
 from sigcore.text import clip, quote
 from sigcore.viewer import DEFAULT_PORT, VIEWER_SENDER, Viewer, ViewerError
@@ -109,7 +110,6 @@ class _Displays(PublicationSink):
         self.grid_version = 0
         self.images: dict[str, dict[str, Any]] = {}
         self.image_versions: dict[str, int] = {}  # never reset: a new image always has a new number
-        self.version = 0
 
     def declare(self, publication: Publication) -> None:
         pass
@@ -125,7 +125,6 @@ class _Displays(PublicationSink):
                 del self.log[:-self.LOG_LINES]
             else:
                 self.results[publication.topic] = text
-            self.version += 1
         elif kind == "sensor_msgs/msg/LaserScan":
             self.scans[publication.topic] = value
         elif kind == "nav_msgs/msg/OccupancyGrid":
@@ -139,13 +138,11 @@ class _Displays(PublicationSink):
         topic = publication.topic
         for store in (self.values, self.results, self.scans, self.images):
             store.pop(topic, None)
-        self.version += 1
 
     def restart(self) -> None:
         """The world was reset: the old trial's events and result are no longer shown."""
         self.log.clear()
         self.results.clear()
-        self.version += 1
 
     def clear(self) -> None:
         """A new world: nothing of the old one is shown."""
@@ -156,7 +153,6 @@ class _Displays(PublicationSink):
         self.images.clear()
         self.grid = None
         self.grid_version += 1
-        self.version += 1
 
 
 class WebViewer(Viewer):
@@ -401,7 +397,7 @@ class WebViewer(Viewer):
             pos, quat = sim.backend.get_pose(name)
             lines.append(f"position: {pos[0]:.3f} {pos[1]:.3f} {pos[2]:.3f} m")
             w, x, y, z = quat
-            yaw = math.degrees(math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+            yaw = math.degrees(quat_yaw(quat))
             lines.append(f"orientation (w x y z): {w:.3f} {x:.3f} {y:.3f} {z:.3f} (yaw {yaw:.1f}°)")
             v = handle.velocity()
             lines.append(f"velocity: {v[0]:.3f} {v[1]:.3f} {v[2]:.3f} m/s")
@@ -436,7 +432,7 @@ class WebViewer(Viewer):
             ok = np.isfinite(ranges) & (ranges < scan["range_max"]) & (ranges >= scan["range_min"])
             local = np.stack([ranges[ok] * np.cos(angles[ok]), ranges[ok] * np.sin(angles[ok]),
                               np.zeros(int(ok.sum()))], axis=1)
-            out.append(local @ _rotation(poses[index, 3:]).T + poses[index, :3])
+            out.append(local @ quat_to_matrix(poses[index, 3:]).T + poses[index, :3])
         return np.vstack(out)
 
     def _contact_points(self, sim: Simulation) -> np.ndarray:
@@ -628,13 +624,6 @@ def _free(host: str, port: int) -> bool:
     return True
 
 
-def _rotation(wxyz: np.ndarray) -> np.ndarray:
-    w, x, y, z = wxyz
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-
-
 def _grid_image(grid: dict[str, Any]) -> tuple[np.ndarray, float, float, np.ndarray, np.ndarray] | None:
     """An occupancy grid as a floor image: free white, occupied black, unknown grey."""
     info = grid.get("info", {})
@@ -649,7 +638,7 @@ def _grid_image(grid: dict[str, Any]) -> tuple[np.ndarray, float, float, np.ndar
     p, o = origin.get("position", {}), origin.get("orientation", {})
     quat = np.array([o.get("w", 1.0), o.get("x", 0.0), o.get("y", 0.0), o.get("z", 0.0)], dtype=float)
     centre = np.array([p.get("x", 0.0), p.get("y", 0.0), p.get("z", 0.0)]) + \
-        _rotation(quat) @ np.array([w * res / 2, h * res / 2, 0.0])
+        quat_to_matrix(quat) @ np.array([w * res / 2, h * res / 2, 0.0])
     centre[2] += 0.003  # just above the floor
     return image, w * res, h * res, centre, quat
 
