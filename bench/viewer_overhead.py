@@ -1,7 +1,8 @@
 """Cost of the web viewer (issue 13): throughput with one browser connected, and the update latency to it.
 
 Usage: .venv/bin/python bench/viewer_overhead.py [WORLD] [--steps N] [--rounds R] [--rate HZ] [--realtime S]
-                                               [--no-pin] [--controller AGENT=CONTROLLER] [--chromedriver PATH]
+                                               [--no-pin] [--viewer-cpu 0|1] [--controller AGENT=CONTROLLER]
+                                               [--chromedriver PATH]
 
 WORLD (default worlds/cleanup.xml) runs with the scripted robot (``robot_000=cleanup.robot``) so that it moves.
 One simulation per condition below is built, and all are advanced in lockstep, the same N steps each per round, by
@@ -13,34 +14,49 @@ each stays connected for the whole bench. A browser that is not part of a condit
 runs, so that it takes no CPU; between rounds every browser runs.
 
 CPU pinning (the default): on the user's machine the browser runs on the user's computer, not on the simulation's
-cores. To model that on one machine, this process (every thread: the simulation, the push threads, viser's) is
-pinned to CPU 0 from the start of ``main``, and every process of every browser (chromedriver and all its
-descendants, every thread of each) to CPU 1, right after the driver started and again before every round (Chromium
-starts new processes); the affinities are read back each time and the report says whether they all held. Then
-``none`` is the simulation alone on CPU 0, and ``viewer`` pays only what the viewer costs in the simulation's process
-(snapshots, the push thread, viser's threads serialising and sending), plus whatever a busy neighbouring CPU costs
-(caches, memory bandwidth: ``idle`` shows it). It is the conservative figure: the viewer's threads take all their
-CPU from the simulation's core, where a machine with a free core could run them while ``mj_step`` has released the
-GIL. ``--no-pin``: everything shares the machine's cores, as when the browser runs on the simulation's machine
-without a GPU (software WebGL then takes about a core).
+cores. To model that on one machine, this process (every thread: the simulation's) is pinned to CPU 0 from the start
+of ``main``; every process of every browser (chromedriver and all its descendants, every thread of each) to CPU 1,
+right after the driver started and again before every round (Chromium starts new processes); the viewers' own
+processes (viser's server and the push thread, ``sigcore_viewer.front``) to ``--viewer-cpu``: by default CPU 1, the
+machine's other core (the simulation uses one core; the viewer's process is what a second core of the simulation's
+machine runs), with ``--viewer-cpu 0`` the simulation's core (the conservative case: every cycle the viewer's
+process uses is taken from the simulation). The affinities are read back each time and the report says whether
+they all held. Then ``none`` is the simulation alone on CPU 0, and ``viewer`` pays what the viewer costs on the
+simulation's thread (snapshots, writing them to the socket), what its process costs on the simulation's core (with
+``--viewer-cpu 0``), plus whatever a busy neighbouring CPU costs (caches, memory bandwidth: ``idle`` shows it).
+``--no-pin``: everything shares the machine's cores, as when the browser runs on the simulation's machine without a
+GPU (software WebGL then takes about a core).
 
-* ``none``:   no viewer serviced, every browser frozen: a run without a viewer;
-* ``again``:  the same as ``none`` on a second simulation: ``again / none`` is the noise floor of the ratios (this
-              machine's speed changes within a second by tens of percent);
-* ``idle``:   no viewer serviced, browser A running (connected, showing its scene, getting no updates);
-* ``viewer``: viewer A serviced between steps (as ``sigcore run --viewer`` does: a snapshot at most ``rate``
-              times a second, pushed to the browser), browser A running: the issue's figure;
-* ``niced``:  (``--no-pin`` only) viewer B, browser B running at nice 19: the browser only gets what the simulation
-              leaves of the cores;
-* ``frozen``: viewer C, its connected browser C frozen: what the viewer costs inside the simulation's process
-              (snapshots, push thread, viser's threads serializing and sending to a client), without the
-              browser's rendering. viser holds the updates for the frozen browser (and drops superseded ones);
-* ``alone``:  viewer D, which no browser ever opened: snapshots and the push thread, nothing sent.
+Conditions (the default four, and with ``--diagnostics`` three more that show where a cost comes from):
+
+* ``none``:    no viewer serviced, every browser frozen: a run without a viewer;
+* ``again``:   the same as ``none`` on a second simulation: ``again / none`` is the noise floor of the ratios (this
+               machine's speed changes within a second by tens of percent);
+* ``drawing``: (pinned only) no viewer serviced; browser F running, drawing the updates of viewer F, which a
+               simulation in another process (the feeder, ``--feed``, at ``--feeder-factor`` x real time, default
+               0.25) feeds at ``rate`` Hz; the feeder, its viewer's process and browser F on CPU 1, frozen outside
+               this condition. It puts on CPU 1 what ``viewer`` puts there (a browser drawing 30 updates a second,
+               a viewer's process), without this simulation's viewer: ``viewer / drawing`` is the viewer's own
+               cost, as with the browser on the user's computer; ``drawing / none`` is what the browser's software
+               rendering on the neighbouring CPU costs this simulation on this VM;
+* ``viewer``:  viewer A serviced between steps (as ``sigcore run --viewer`` does: a snapshot at most ``rate``
+               times a second, sent to its process, which pushes it to the browser), browser A running;
+* ``idle``:    (diagnostics) no viewer serviced, browser A running (connected, showing its scene, no updates);
+* ``niced``:   (diagnostics, ``--no-pin`` only) viewer B, browser B running at nice 19: the browser only gets what
+               the simulation leaves of the cores;
+* ``frozen``:  (diagnostics) viewer C, its connected browser C frozen: what the viewer costs (snapshots; its
+               process serializing and sending to a client), without the browser's rendering. viser holds the
+               updates for the frozen browser (and drops superseded ones);
+* ``alone``:   (diagnostics) viewer D, which no browser ever opened: snapshots and the viewer's process, nothing
+               sent.
 
 Target (issue 13): steps per second with the viewer and one browser >= 0.9 x without a viewer, same run (pinned).
+The report gives the ratios of the medians over the rounds and, less sensitive to the machine's drift, the median
+of the per-round ratios with a 95 % confidence interval.
 
 Latency of an update, from the moment the snapshot is taken on the simulation thread (``Snapshot.wall``,
-``time.perf_counter``) to (a) the push thread having handed it to viser (``push_observers``) and (b) the browser's
+``time.perf_counter``, the machine's monotonic clock, shared by its processes) to (a) the viewer's process having
+handed it to viser (its report, ``push_observers``) and (b) the browser's
 DOM showing its status line ("step N"): a MutationObserver in the page records ``performance.timeOrigin +
 performance.now()`` when the number changes, and the time of the next animation frame after it. The browser's
 epoch clock is mapped to ``perf_counter`` through ``time.time()`` (checked at start: a browser reading must fall
@@ -56,6 +72,8 @@ import os
 import shutil
 import signal
 import statistics
+import subprocess
+import sys
 import tempfile
 import threading
 import time
@@ -63,7 +81,7 @@ from pathlib import Path
 from typing import Any
 
 from sigcore_viewer import WebViewer
-from sigcore_viewer.viewer import Snapshot
+from sigcore_viewer.viewer import Pushed
 
 from sigcore.sim import Simulation, run
 from sigcore.transport import Transport
@@ -98,12 +116,13 @@ return rec.length;
 """.replace("XPATH", STATUS)
 FRAMES = "return window.__sigFrames;"
 
-CONDITIONS = ("none", "again", "idle", "viewer", "niced", "frozen", "alone")
+CONDITIONS = ("none", "again", "idle", "drawing", "viewer", "niced", "frozen", "alone")
 LABELS = {"none": "no viewer (browsers frozen)", "again": "no viewer again (a second simulation)",
           "idle": "no viewer, browser A connected and idle",
+          "drawing": "no viewer, browser F drawing another run",
           "viewer": "viewer A, browser A connected", "niced": "viewer B, browser B at nice 19",
           "frozen": "viewer C, browser C connected but frozen", "alone": "viewer D, no browser ever connected"}
-BROWSER = {"idle": "A", "viewer": "A", "niced": "B"}  # the browser that runs during a condition (others: frozen)
+BROWSER = {"idle": "A", "drawing": "F", "viewer": "A", "niced": "B"}  # the browser running (others: frozen)
 VIEWER = {"viewer": "A", "niced": "B", "frozen": "C", "alone": "D"}  # the viewer serviced during a condition
 
 
@@ -131,6 +150,16 @@ class _Serviced(Transport):
 def _p(values: list[float], q: float) -> float:
     s = sorted(values)
     return s[min(len(s) - 1, int(q * len(s)))]
+
+
+def _median_ci(values: list[float]) -> tuple[float, float, float]:
+    """The median of ``values`` and a distribution-free 95 % confidence interval for it (order statistics
+    n/2 -+ 0.98 sqrt(n), the normal approximation of the binomial)."""
+    s = sorted(values)
+    n = len(s)
+    half = 0.98 * n ** 0.5
+    lo, hi = max(0, int(n / 2 - half)), min(n - 1, int(n / 2 + half + 0.999))
+    return statistics.median(s), s[lo], s[hi]
 
 
 def _children(pid: int) -> list[int]:
@@ -212,17 +241,23 @@ def _chromium(before: dict[str, float], after: dict[str, float], wall: float) ->
     return f"{sum(used.values()):6.1f}" + (f" ({parts})" if parts else "")
 
 
-def _thread_cpu() -> dict[str, float]:
-    """CPU time of this process's threads so far [s]: the simulation (main) thread, the viewers' push threads,
-    the others (viser's servers and event loops)."""
-    out = {"sim": 0.0, "push": 0.0, "viser": 0.0}
+def _thread_cpu(viewers: dict[str, int]) -> dict[str, float]:
+    """CPU time so far [s]: of this process's simulation (main) thread, of its other threads (``other``), and of
+    each viewer's process (``viewer A``...: viser's server, its push thread, its reader; every thread)."""
+    out = {"sim": 0.0, "other": 0.0}
     for t in threading.enumerate():
         try:
             cpu = time.clock_gettime(time.pthread_getcpuclockid(t.ident))  # type: ignore[arg-type]
         except (OSError, TypeError):
             continue
-        key = "sim" if t is threading.main_thread() else "push" if t.name == "sigcore-viewer-push" else "viser"
-        out[key] += cpu
+        out["sim" if t is threading.main_thread() else "other"] += cpu
+    for v, pid in viewers.items():
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            out[f"viewer {v}"] = (int(fields[11]) + int(fields[12])) / TICK
+        except OSError:
+            out[f"viewer {v}"] = 0.0
     return out
 
 
@@ -257,6 +292,7 @@ class _Browser:
         self.shown_after = float("nan")
         self.error: BaseException | None = None
         self.pinned = (0, 0, 0)  # what the last pin() found: (processes, threads, threads not on self.cpu)
+        self.feeder: list[int] = []  # browser F: the feeder and its viewer's process, frozen and thawed with it
 
     def open(self) -> None:
         """Start the browser and wait until the page shows the viewer's status line (run on a thread)."""
@@ -295,7 +331,7 @@ class _Browser:
             self.pinned = _pin([self.driver_pid, *_children(self.driver_pid)], self.cpu)
 
     def signal(self, sig: int) -> None:
-        for pid in self.pids:
+        for pid in self.pids + self.feeder:
             try:
                 os.kill(pid, sig)
             except ProcessLookupError:
@@ -351,21 +387,62 @@ def _latency(pushes: dict[int, tuple[float, float]], records: list[list[float]],
     return out
 
 
+def feed(world: str, controller: str, rate: float, factor: float) -> None:
+    """The feeder of condition ``drawing`` (``--feed``): a simulation paced at ``factor`` x real time (no catching
+    up after a SIGSTOP) with a viewer on the next free port; prints ``ready URL``, runs until stdin closes."""
+    agent, _, name = controller.partition("=")
+    sim = Simulation(parse_world(world), "mujoco", controllers={agent: name})
+    viewer = WebViewer(rate=rate)
+    viewer.open()
+    viewer.start(sim)
+    print(f"ready {viewer.url}", flush=True)
+    done = threading.Event()
+    threading.Thread(target=lambda: (sys.stdin.read(), done.set()), daemon=True).start()
+    t0, w0 = sim.time, time.perf_counter()
+    try:
+        while not done.is_set():
+            viewer.service(0.0)
+            sim.step()
+            ahead = (sim.time - t0) / factor - (time.perf_counter() - w0)
+            if ahead > 0.001:
+                time.sleep(ahead)
+            elif ahead < -0.05:  # it was frozen: go on from here
+                t0, w0 = sim.time, time.perf_counter()
+    finally:
+        viewer.stop()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("world", nargs="?", default=str(ROOT / "worlds" / "cleanup.xml"))
     ap.add_argument("--controller", default="robot_000=cleanup.robot", help="AGENT=CONTROLLER, so that it moves")
-    ap.add_argument("--steps", type=int, default=2500, help="steps per round and condition")
-    ap.add_argument("--rounds", type=int, default=12)
+    ap.add_argument("--steps", type=int, default=600, help="steps per round and condition")
+    ap.add_argument("--rounds", type=int, default=50,
+                    help="rounds (the scripted robot finishes the task after about 45000 steps, which ends the run: "
+                         "keep rounds x steps + 6000 below that)")
+    ap.add_argument("--diagnostics", action="store_true",
+                    help="also the conditions idle, frozen and alone (and niced with --no-pin): where a cost comes "
+                         "from; each makes a round longer")
     ap.add_argument("--rate", type=float, default=30.0, help="viewer updates per wall second [Hz]")
     ap.add_argument("--realtime", type=float, default=10.0, help="seconds of the real-time latency phase")
     ap.add_argument("--no-pin", dest="pin", action="store_false",
                     help=f"no CPU pinning (default: this process on CPU {SIM_CPU}, the browsers on CPU {BROWSER_CPU})")
+    ap.add_argument("--viewer-cpu", type=int, choices=(SIM_CPU, BROWSER_CPU), default=BROWSER_CPU,
+                    help=f"with pinning, the CPU of the viewers' processes (default {BROWSER_CPU}: the machine's "
+                         f"other core, beside the browsers; {SIM_CPU}: the simulation's core, the conservative case)")
+    ap.add_argument("--feeder-factor", type=float, default=0.25,
+                    help="real-time factor of the feeder's simulation (condition drawing; default 0.25: about 5 %% of "
+                         "a CPU, so that CPU 1 carries what it carries in condition viewer)")
+    ap.add_argument("--feed", action="store_true", help=argparse.SUPPRESS)  # this script as the feeder
     ap.add_argument("--chromedriver", default="/usr/bin/chromedriver")
     args = ap.parse_args()
+    if args.feed:
+        feed(args.world, args.controller, args.rate, args.feeder_factor)
+        return
     pin: bool = args.pin
     allowed = sorted(os.sched_getaffinity(0))
-    checks: dict[str, list[tuple[int, int, int]]] = {"self": [], "chromium": []}  # what each pinning read back
+    checks: dict[str, list[tuple[int, int, int]]] = {"self": [], "chromium": [], "viewers": [], "feeder": []}
+    feeder: subprocess.Popen[str] | None = None
     if pin:
         if not {SIM_CPU, BROWSER_CPU} <= set(allowed):
             raise SystemExit(f"pinning needs CPUs {SIM_CPU} and {BROWSER_CPU}; this process may run on {allowed} "
@@ -374,7 +451,9 @@ def main() -> None:
         checks["self"].append(_pin(["self"], SIM_CPU))  # and any thread an import started
     load0 = os.getloadavg()
 
-    conditions = tuple(c for c in CONDITIONS if not (pin and c == "niced"))
+    wanted = set(CONDITIONS) if args.diagnostics else {"none", "again", "drawing", "viewer"}
+    conditions = tuple(c for c in CONDITIONS if c in wanted and not (pin and c == "niced")
+                       and not (not pin and c == "drawing"))
     owner = {VIEWER[c]: c for c in conditions if c in VIEWER}  # viewer letter -> its condition: A (B) C D
     agent, _, controller = args.controller.partition("=")
     world = parse_world(args.world)
@@ -383,16 +462,22 @@ def main() -> None:
     serviced = {v: _Serviced(viewer) for v, viewer in viewers.items()}
     pushes: dict[str, dict[int, tuple[float, float]]] = {v: {} for v in owner}  # step -> (taken, handed over)
     for v, viewer in viewers.items():
-        def pushed(snap: Snapshot, into: dict[int, tuple[float, float]] = pushes[v]) -> None:
-            into[snap.step] = (snap.wall, time.perf_counter())
+        def pushed(report: Pushed, into: dict[int, tuple[float, float]] = pushes[v]) -> None:
+            into[report.step] = (report.taken, report.handed)
         viewer.push_observers.append(pushed)
     browsers: dict[str, _Browser] = {}
     started: list[WebViewer] = []
     t_start = time.perf_counter()
 
+    viewer_pids: dict[str, int] = {}
+
     def pin_all() -> None:
-        """Pin (again) and read back: this process's threads on CPU 0, every browser process on CPU 1."""
+        """Pin (again) and read back: this process's threads on CPU 0, every browser process on CPU 1, the viewers'
+        processes on ``--viewer-cpu``."""
         checks["self"].append(_pin(["self"], SIM_CPU))
+        checks["viewers"].append(_pin(list(viewer_pids.values()), args.viewer_cpu))
+        if "F" in browsers:
+            checks["feeder"].append(_pin(browsers["F"].feeder, BROWSER_CPU))
         for b in browsers.values():
             b.pin()
             checks["chromium"].append(b.pinned)
@@ -402,12 +487,26 @@ def main() -> None:
             viewers[v].open()
             viewers[v].start(sims[c])
             started.append(viewers[v])
+            viewer_pids[v] = viewers[v].process_id or 0
             if v != "D":
                 browsers[v] = _Browser(viewers[v].url, args.chromedriver, BROWSER_CPU if pin else None)
+        if "drawing" in conditions:
+            feeder = subprocess.Popen(
+                [sys.executable, __file__, "--feed", "--rate", str(args.rate), "--feeder-factor",
+                 str(args.feeder_factor), "--controller", args.controller, args.world],
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                preexec_fn=lambda: os.sched_setaffinity(0, {BROWSER_CPU}))  # it and its viewer's process
+            assert feeder.stdout is not None
+            ready = feeder.stdout.readline().split()
+            if not ready or ready[0] != "ready":
+                raise SystemExit(f"the feeder did not start (it printed {ready!r})")
+            browsers["F"] = _Browser(ready[1], args.chromedriver, BROWSER_CPU)
+            browsers["F"].feeder = [feeder.pid, *_children(feeder.pid)]
         print(f"viewers at {', '.join(viewer.url for viewer in viewers.values())}; starting {len(browsers)} "
               f"headless Chromium ({', '.join(browsers)})", flush=True)
         if pin:
-            checks["self"].append(_pin(["self"], SIM_CPU))  # viser's threads inherited it; to be sure
+            checks["self"].append(_pin(["self"], SIM_CPU))  # to be sure
+            checks["viewers"].append(_pin(list(viewer_pids.values()), args.viewer_cpu))
         openers = [threading.Thread(target=b.open, daemon=True) for b in browsers.values()]
         for t in openers:
             t.start()
@@ -425,7 +524,9 @@ def main() -> None:
             own, theirs = checks["self"][-1], checks["chromium"][-len(browsers):]
             ok = own[2] == 0 and all(w == 0 for _, _, w in theirs) and all(w == 0 for _, _, w in
                                                                              started_pins.values())
-            print(f"pinned: this process ({own[1]} threads) to CPU {SIM_CPU}; chromedriver and Chromium to CPU "
+            ok = ok and checks["viewers"][-1][2] == 0
+            print(f"pinned: this process ({own[1]} threads) to CPU {SIM_CPU}; the viewers' processes "
+                  f"({checks['viewers'][-1][1]} threads) to CPU {args.viewer_cpu}; chromedriver and Chromium to CPU "
                   f"{BROWSER_CPU} (" + "; ".join(f"{v}: {p} processes, {t} threads" for v, (p, t, _) in
                                                   zip(browsers, theirs, strict=True)) +
                   f"); read back: {'every thread on its CPU' if ok else 'NOT every thread on its CPU'}", flush=True)
@@ -457,7 +558,7 @@ def main() -> None:
 
         rates: dict[str, list[float]] = {c: [] for c in conditions}
         cpu_sim: dict[str, list[float]] = {c: [] for c in conditions}  # simulation-thread CPU [us/step]
-        use: dict[str, dict[str, float]] = {c: dict.fromkeys(("sim", "push", "viser", "wall", "frames", "service",
+        use: dict[str, dict[str, float]] = {c: dict.fromkeys(("sim", "other", "viewer", "wall", "frames", "service",
                                                               "updates", "preempted"), 0.0) for c in conditions}
         chromium_cpu: dict[str, dict[str, float]] = {c: {} for c in conditions}  # CPU [s] by process type
         per_cpu: dict[str, dict[int, list[int]]] = {c: {} for c in conditions}  # CPU -> [busy, steal, all] ticks
@@ -482,7 +583,7 @@ def main() -> None:
                 frames0 = browsers[running].script(FRAMES) if running else 0
                 transport = serviced[VIEWER[c]] if c in VIEWER else None
                 viewer = viewers[VIEWER[c]] if c in VIEWER else None
-                before_t, before_p, before_c = _thread_cpu(), _proc_cpu(all_pids), _cpu_ticks()
+                before_t, before_p, before_c = _thread_cpu(viewer_pids), _proc_cpu(all_pids), _cpu_ticks()
                 busy0 = transport.busy if transport else 0.0
                 pushed0, step0 = (viewer.pushed if viewer else 0), sim.elapsed_steps
                 preempted0 = _preempted()
@@ -490,7 +591,7 @@ def main() -> None:
                 rep = run(sim, steps=args.steps, realtime_factor=None, transport=transport)
                 cpu = time.thread_time() - c0
                 use[c]["preempted"] += _preempted() - preempted0
-                after_t, after_p, after_c = _thread_cpu(), _proc_cpu(all_pids), _cpu_ticks()
+                after_t, after_p, after_c = _thread_cpu(viewer_pids), _proc_cpu(all_pids), _cpu_ticks()
                 if running:
                     use[c]["frames"] += browsers[running].script(FRAMES) - frames0
                 for b in browsers.values():
@@ -500,8 +601,9 @@ def main() -> None:
                                      f"(stopped by {rep.stopped_by}): fewer --steps or --rounds")
                 rates[c].append(rep.steps / rep.wall_time)
                 cpu_sim[c].append(cpu / rep.steps * 1e6)
-                for key in ("sim", "push", "viser"):
+                for key in ("sim", "other"):
                     use[c][key] += after_t[key] - before_t[key]
+                use[c]["viewer"] += sum(after_t[k] - before_t[k] for k in after_t if k.startswith("viewer "))
                 for kind in after_p:
                     chromium_cpu[c][kind] = chromium_cpu[c].get(kind, 0.0) + after_p[kind] - before_p.get(kind, 0.0)
                 for n, ticks in after_c.items():
@@ -516,7 +618,7 @@ def main() -> None:
                     ranges[c].append((step0, sim.elapsed_steps))
                     text += f" ({viewer.pushed - pushed0} updates)"
                 line.append(text)
-                time.sleep(0.3)  # the push threads finish, the browsers catch up: nothing spills into the next
+                time.sleep(0.3)  # the viewers' processes finish, the browsers catch up: nothing spills over
             print(f"  round {r + 1} [steps/s]: " + ",  ".join(line), flush=True)
 
         print(f"real-time phase: {args.realtime:g} s of viewer A at real-time factor 1", flush=True)
@@ -531,13 +633,13 @@ def main() -> None:
         for b in others:
             b.signal(signal.SIGSTOP)
         frames0 = browsers["A"].script(FRAMES)
-        before_t, before_p = _thread_cpu(), _proc_cpu(all_pids)
+        before_t, before_p = _thread_cpu(viewer_pids), _proc_cpu(all_pids)
         rt = run(sim, duration=args.realtime, realtime_factor=1.0, transport=serviced["A"])
-        after_t, after_p = _thread_cpu(), _proc_cpu(all_pids)
+        after_t, after_p = _thread_cpu(viewer_pids), _proc_cpu(all_pids)
         rt_fps = (browsers["A"].script(FRAMES) - frames0) / rt.wall_time
         for b in others:
             b.signal(signal.SIGCONT)
-        rt_use = {key: (after_t[key] - before_t[key]) / rt.wall_time for key in ("sim", "push", "viser")}
+        rt_use = {key: (after_t[key] - before_t[key]) / rt.wall_time for key in ("sim", "other", "viewer A")}
         rt_chromium = _chromium(before_p, after_p, rt.wall_time)
         time.sleep(1.0)  # the last updates reach the pages
         records = {v: b.script("return window.__sigRec;") for v, b in browsers.items()}
@@ -547,6 +649,8 @@ def main() -> None:
             b.close()
         for viewer in started:
             viewer.stop()
+        if feeder is not None:
+            feeder.communicate(timeout=30)  # stdin closed: it stops its viewer and ends
 
     # ------------------------------------------------------------------ report
     dt = world.timestep
@@ -558,9 +662,11 @@ def main() -> None:
     print(f"browsers: headless Chromium 1280x800 (software WebGL: SwiftShader; no GPU), {', '.join(browsers)}, one per "
           "viewer, connected for the whole bench")
     if pin:
-        mine, ch = checks["self"], checks["chromium"]
-        wrong = sum(w for _, _, w in mine) + sum(w for _, _, w in ch)
-        print(f"pinning: this process on CPU {SIM_CPU}, chromedriver and every Chromium process on CPU {BROWSER_CPU}, "
+        mine, ch, vw = checks["self"], checks["chromium"], checks["viewers"]
+        wrong = sum(w for _, _, w in mine) + sum(w for _, _, w in ch) + sum(w for _, _, w in vw)
+        print(f"pinning: this process on CPU {SIM_CPU}, the viewers' processes ({min(t for _, t, _ in vw)}-"
+              f"{max(t for _, t, _ in vw)} threads) on CPU {args.viewer_cpu}, "
+              f"chromedriver and every Chromium process on CPU {BROWSER_CPU}, "
               f"set and read back {len(mine)} times (at start, after the browsers started, before every round and the "
               f"real-time phase): {min(t for _, t, _ in mine)}-{max(t for _, t, _ in mine)} threads of this process, "
               f"{min(p for p, _, _ in ch)}-{max(p for p, _, _ in ch)} processes / {min(t for _, t, _ in ch)}-"
@@ -576,15 +682,25 @@ def main() -> None:
               f"real-time factor {med[c] * dt:5.1f}")
     base = rates["none"]
     for c in conditions[1:]:
-        target = {"viewer": "  (target >= 0.9)", "again": "  (noise floor: same work)"}.get(c, "")
+        target = {"viewer": "  (target >= 0.9; the browser's rendering on CPU 1 included)",
+                  "again": "  (noise floor: same work)"}.get(c, "")
         print(f"ratio {c + ' / none:':16s} {med[c] / med['none']:.3f}{target}   per round: "
               f"{', '.join(f'{x / n:.2f}' for x, n in zip(rates[c], base, strict=True))}")
+    if "drawing" in conditions:
+        print(f"ratio viewer / drawing: {med['viewer'] / med['drawing']:.3f}  (target >= 0.9: the viewer's own cost, "
+              "the same browser load on CPU 1 in both)   per round: "
+              f"{', '.join(f'{x / n:.2f}' for x, n in zip(rates['viewer'], rates['drawing'], strict=True))}")
+    print("median of the per-round ratios (95 % confidence interval of the median):")
+    for c, ref in (("again", "none"), ("viewer", "none"), ("drawing", "none"), ("viewer", "drawing")):
+        if c in conditions and ref in conditions:
+            mid, lo, hi = _median_ci([x / n for x, n in zip(rates[c], rates[ref], strict=True)])
+            print(f"  {c + ' / ' + ref + ':':18s} {mid:.3f} ({lo:.3f}-{hi:.3f})")
     print("CPU while each condition ran [% of one CPU]:")
     for c in conditions:
         u = use[c]
         w = u["wall"]
         text = (f"  {c:7s} simulation thread {u['sim'] / w * 100:5.1f} (preempted {u['preempted'] / w:3.0f}/s)   "
-                f"push threads {u['push'] / w * 100:4.1f}   viser threads {u['viser'] / w * 100:4.1f}   "
+                f"its other threads {u['other'] / w * 100:4.1f}   viewers' processes {u['viewer'] / w * 100:5.1f}   "
                 f"Chromium {_chromium({}, chromium_cpu[c], w)}")
         if c in BROWSER:
             text += f"   page {u['frames'] / w:.1f} frames/s"
@@ -597,18 +713,18 @@ def main() -> None:
         if u.get("updates"):
             print(f"  {c:7s} {u['updates']:.0f} updates ({u['updates'] / u['wall']:.1f}/s); on the simulation "
                   f"thread viewer.service {u['service'] / u['updates'] * 1e3:.2f} ms per update (all its calls: "
-                  f"{u['service'] / u['wall'] * 100:.1f} % of the wall time); push thread "
-                  f"{u['push'] / u['updates'] * 1e3:.2f} ms CPU per update, viser threads "
-                  f"{u['viser'] / u['updates'] * 1e3:.2f} ms")
+                  f"{u['service'] / u['wall'] * 100:.1f} % of the wall time); the viewers' processes "
+                  f"{u['viewer'] / u['updates'] * 1e3:.2f} ms CPU per update (10 ms ticks)")
     print(f"  real-time phase ({rt.steps} steps in {rt.wall_time:.1f} s): simulation thread {rt_use['sim'] * 100:.1f}"
-          f"   push thread {rt_use['push'] * 100:.1f}   viser threads {rt_use['viser'] * 100:.1f}   Chromium "
+          f"   its other threads {rt_use['other'] * 100:.1f}   viewer A's process {rt_use['viewer A'] * 100:.1f}   "
+          "Chromium "
           f"{rt_chromium.strip()}   page {rt_fps:.1f} frames/s")
     lo = min(b[0] for b in brackets) * 1e3
     hi = min(b[1] for b in brackets) * 1e3
     clock = (f"browser clock - Python's within -{hi:.1f} .. +{lo:.1f} ms" if clock_ok else
              f"browser clock OUTSIDE Python's bracket: {lo:.1f} / {hi:.1f} ms; the page latencies are off")
     print(f"latency [ms] from the snapshot taken on the simulation thread ({clock}):")
-    names = {"push": "handed to viser (push thread)", "dom": "shown in the page's DOM",
+    names = {"push": "handed to viser (viewer's process)", "dom": "shown in the page's DOM",
              "frame": "next animation frame after"}
     phases = [(f"{LABELS[c]}, as fast as possible", VIEWER[c], ranges[c]) for c in ("viewer", "niced", "frozen",
                                                                                      "alone") if c in conditions]

@@ -108,6 +108,21 @@ class Backend(ABC):
     def get_pose(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
         """World position [m] and orientation (w, x, y, z) of a part's frame (URDF link frame)."""
 
+    def get_poses(self, parts: Sequence[tuple[str, str | None]]) -> Array:
+        """The poses of many parts at once: an (n, 7) array, row i the position [m] and the orientation (w, x, y, z)
+        of ``parts[i]`` = ``(entity, part)`` as :meth:`get_pose` gives it. A viewer or a recorder reads every frame
+        with one call; a backend may do it faster than one call per part (the default is that loop).
+
+        Raises:
+            BackendRefusal: an entity or a part that does not exist (named, like :meth:`get_pose`).
+        """
+        out = np.empty((len(parts), 7))
+        for i, (entity, part) in enumerate(parts):
+            pos, quat = self.get_pose(entity, part)
+            out[i, :3] = pos
+            out[i, 3:] = quat
+        return out
+
     @abstractmethod
     def set_pose(self, entity: str, position: Array | None = None, quaternion: Array | None = None) -> None:
         """Teleport the entity so that its main part has this pose (``None`` keeps that component)."""

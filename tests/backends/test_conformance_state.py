@@ -137,6 +137,28 @@ def test_pose_after_step(make_world, build) -> None:
     assert b.get_pose("o")[0][0] == pytest.approx(3.0 * 0.002, rel=1e-7)  # PyBullet: 1e-8 off
 
 
+def test_get_poses_is_get_pose_for_every_part(make_world, build) -> None:
+    """get_poses (one call for many parts: what the viewer reads between steps) gives, row by row, exactly what
+    get_pose gives for each (entity, part), after steps that moved them; an unknown part is refused like get_pose
+    refuses it, naming the part."""
+    from sigcore.backend import BackendRefusal
+
+    b = build(make_world(robot() + '<object name="o" shape="box" size="0.1 0.2 0.3" pose="2 0 1 0.4 0.5 0.6"/>'
+                         '<human name="h" pose="-3 0 0"/>'))
+    b.set_velocity("o", np.array([1.0, 0.0, 0.5]), np.array([0.3, -0.7, 1.5]))
+    for _ in range(20):
+        b.step()
+    parts = [("bot", None), *[("bot", link) for link in LINKS], ("o", None), ("o", "main"), ("h", None)]
+    poses = b.get_poses(parts)
+    assert poses.shape == (len(parts), 7)
+    for row, (entity, part) in zip(poses, parts, strict=True):
+        pos, quat = b.get_pose(entity, part)
+        assert np.array_equal(row, np.concatenate([pos, quat]))
+    assert b.get_poses([]).shape == (0, 7)
+    with pytest.raises(BackendRefusal, match="elbow_link"):
+        b.get_poses([("bot", None), ("bot", "elbow_link")])
+
+
 def test_set_velocity_then_get(make_world, build) -> None:
     """set_velocity then get_velocity gives the same world-frame linear and angular velocity, rotated body
     too."""

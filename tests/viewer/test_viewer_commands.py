@@ -2,8 +2,9 @@
 
 Each test starts a real :class:`WebViewer` (a viser server on a free port) on a real MuJoCo simulation and drives it
 in lockstep from the test thread, which plays the simulation thread: it services the viewer and steps, as the loop
-of :func:`sigcore.sim.run` does. Commands are queued as the panel queues them (``_post``) and run at the next
-service; what the push thread sent is read through ``push_observers``.
+of :func:`sigcore.sim.run` does. Commands are queued (``_post``) and run at the next service; the snapshots taken are
+read through ``snapshot_observers``, the viewer's process reports each one it handed to viser (``push_observers``),
+and what viser holds for a scene node there is asked with ``node_pose``.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 import pytest
 from sigcore_viewer import viewer as v
 from sigcore_viewer.scenebuild import SceneLayout
-from sigcore_viewer.viewer import Snapshot, WebViewer
+from sigcore_viewer.viewer import Pushed, Snapshot, WebViewer
 
 from sigcore.agent.events import Message
 from sigcore.publish import Publication
@@ -45,18 +46,22 @@ def port_of(viewer: WebViewer) -> int:
 
 
 class Lockstep:
-    """A started viewer on ``sim``, driven from the test thread, and the snapshots its push thread sent.
+    """A started viewer on ``sim``, driven from the test thread, the snapshots it took and the reports of those its
+    process pushed.
 
     Args:
         sim: The simulation.
-        viewer: The viewer, already started on ``sim``.
+        viewer: The viewer, open; started on ``sim`` here, once it is watched.
     """
 
     def __init__(self, sim: Simulation, viewer: WebViewer) -> None:
         self.sim = sim
         self.viewer = viewer
-        self.pushed: list[Snapshot] = []
-        viewer.push_observers.append(self.pushed.append)  # list.append: safe from the push thread
+        self.taken: list[Snapshot] = []
+        self.reports: list[Pushed] = []
+        viewer.snapshot_observers.append(self.taken.append)
+        viewer.push_observers.append(self.reports.append)
+        viewer.start(sim)
 
     def tick(self) -> bool:
         """One pass of the run loop: service the viewer, apply a reset it asked for, step unless paused.
@@ -77,13 +82,14 @@ class Lockstep:
         return True
 
     def show(self) -> Snapshot:
-        """Service the viewer (no step) until it takes a snapshot, and return that snapshot once pushed."""
+        """Service the viewer (no step) until it takes a snapshot and its process has pushed it (or a later one: it
+        skips those it had no time for); return the newest snapshot pushed."""
         since = time.perf_counter()
         deadline = since + TIMEOUT
         while time.perf_counter() < deadline:
             self.viewer.service(0.0)
-            if self.pushed and self.pushed[-1].wall >= since:
-                return self.pushed[-1]
+            if self.reports and self.reports[-1].taken >= since:
+                return next(s for s in reversed(self.taken) if s.wall == self.reports[-1].taken)
             time.sleep(0.002)
         pytest.fail(f"no snapshot was pushed within {TIMEOUT} s")
 
@@ -93,8 +99,8 @@ class Lockstep:
         return self.show()
 
     def layout(self) -> SceneLayout:
-        """The newest layout pushed (the first snapshot always carries one)."""
-        return next(s.layout for s in reversed(self.pushed) if s.layout is not None)
+        """The newest layout sent (the first snapshot always carries one)."""
+        return next(s.layout for s in reversed(self.taken) if s.layout is not None)
 
 
 def newest_note(snap: Snapshot) -> str:
@@ -138,7 +144,6 @@ def lockstep(viewers: Callable[..., WebViewer]) -> Callable[[Simulation], Lockst
     def start(sim: Simulation) -> Lockstep:
         viewer = viewers(free_port())
         viewer.open()
-        viewer.start(sim)
         return Lockstep(sim, viewer)
     return start
 
@@ -222,9 +227,9 @@ def test_move_entity(cleanup: Simulation, lockstep: Callable[[Simulation], Locks
     np.testing.assert_allclose(quat, wxyz, atol=1e-6)
     index = lock.layout().parts.index(("can_0", None))
     np.testing.assert_allclose(snap.poses[index], np.concatenate([target, wxyz]), atol=1e-6)
-    node = lock.viewer._server.scene.get_handle_by_name(f"/sigcore/f{index}")  # what viser sends the browsers
-    np.testing.assert_allclose(np.concatenate([node.position, node.wxyz]), np.concatenate([target, wxyz]),
-                               atol=1e-6)
+    node = lock.viewer.node_pose(f"/sigcore/f{index}")  # what viser sends the browsers, in the viewer's process
+    assert node is not None
+    np.testing.assert_allclose(np.concatenate(node), np.concatenate([target, wxyz]), atol=1e-6)
 
     table_pos, table_quat = (np.array(a) for a in cleanup.backend.get_pose("table_0"))
     snap = lock.run(v.move_entity("table_0", target, wxyz))
@@ -268,7 +273,7 @@ def test_snapshot_shows_every_entity_the_status_and_the_score(
     for _ in range(10):
         assert lock.tick()
     snap = lock.show()
-    layout = lock.pushed[0].layout
+    layout = lock.taken[0].layout
     assert layout is not None
     assert [entity for entity, part in layout.parts if part is None] == list(cleanup.entity_names)
     assert len(set(layout.frames)) == len(layout.frames) == snap.poses.shape[0]
@@ -371,12 +376,60 @@ def test_run_services_the_viewer_and_frees_its_port(cleanup: Simulation,
         if sim.elapsed_steps == 100:
             viewer._post(lambda s: ran.append(s.elapsed_steps))
 
+    taken: list[Snapshot] = []
+    viewer.snapshot_observers.append(taken.append)
     cleanup.add_step_observer(at_step_100)
     report = run(cleanup, steps=200, transport=[viewer], realtime_factor=None)
     assert (report.error, report.stopped_by, report.steps) == (None, None, 200)
     assert ran == [100]
-    assert viewer.pushed >= 1
+    assert taken and taken[0].layout is not None and taken[0].step == 0
     with pytest.raises(ViewerError, match="not open yet"):
         viewer.url  # noqa: B018 - the property raises
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", port))  # raises OSError if the server still held it
+
+
+# ------------------------------------------------------------------ the viewer's process
+def test_requests_from_the_panel(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
+    """The panel's requests (plain tuples from the viewer's process) become the commands: ("step", 3) queues three
+    steps, ("overlay", "scan", True) turns the scan on; an unknown request, one with the wrong arguments and an
+    unknown overlay are notes naming what was sent, and change nothing."""
+    lock = lockstep(cleanup)
+    lock.run(lock.viewer._request(("pause",)))
+    lock.run(lock.viewer._request(("step", 3)))
+    assert (cleanup.control.paused, cleanup.control.pending_steps) == (True, 3)
+    assert lock.run(lock.viewer._request(("overlay", "scan", True))).scan is not None
+    snap = lock.run(lock.viewer._request(("launch", "rocket")))
+    assert newest_note(snap) == "the viewer sent a request sigcore does not know: ('launch', 'rocket')"
+    snap = lock.run(lock.viewer._request(("step",)))
+    assert newest_note(snap) == "the viewer sent a request sigcore does not know: ('step',)"
+    snap = lock.run(lock.viewer._request(("overlay", "smoke", True)))
+    assert newest_note(snap).startswith("unknown overlay 'smoke'; valid: names, frames, scan")
+    assert cleanup.control.pending_steps == 3
+
+
+def test_a_crashed_viewer_process_leaves_the_run_going(cleanup: Simulation, viewers: Callable[..., WebViewer],
+                                                        caplog: pytest.LogCaptureFixture) -> None:
+    """The viewer's process killed in the middle of a run (SIGKILL: it cannot say goodbye): the run goes on to its
+    last step without an error, a warning says the viewer is gone, and stop() afterwards is clean."""
+    import os
+    import signal
+
+    viewer = viewers(free_port())
+    viewer.open()
+    pid = viewer.process_id
+    assert pid is not None
+
+    def kill_at_step_50(sim: Simulation) -> None:
+        if sim.elapsed_steps == 50:
+            os.kill(pid, signal.SIGKILL)
+            assert viewer._proc is not None
+            viewer._proc.wait(timeout=TIMEOUT)  # gone, its end of the socket closed, before step 51
+
+    cleanup.add_step_observer(kill_at_step_50)
+    with caplog.at_level("WARNING", logger="sigcore.viewer"):
+        report = run(cleanup, steps=3000, transport=[viewer], realtime_factor=None)
+    assert (report.error, report.stopped_by, report.steps) == (None, None, 3000)
+    assert any("its process ended" in r.getMessage() and "goes on without the viewer" in r.getMessage()
+               for r in caplog.records)
+    assert viewer.process_id is None

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from sigcore_viewer.viewer import Snapshot, WebViewer
+from sigcore_viewer.viewer import Pushed, Snapshot, WebViewer
 
 from sigcore.geometry import quat_to_matrix
 from sigcore.publish import Publication
@@ -23,15 +23,24 @@ TIMEOUT = 10.0
 """Wall seconds a snapshot may take to be pushed (milliseconds here; generous for a loaded CI)."""
 
 
+class Taken(list[Snapshot]):
+    """The snapshots a viewer took, and the reports of those its process handed to viser."""
+
+    def __init__(self, viewer: WebViewer) -> None:
+        super().__init__()
+        self.reports: list[Pushed] = []
+        viewer.snapshot_observers.append(self.append)
+        viewer.push_observers.append(self.reports.append)
+
+
 @pytest.fixture
-def started() -> Iterator[tuple[Simulation, WebViewer, list[Snapshot]]]:
+def started() -> Iterator[tuple[Simulation, WebViewer, Taken]]:
     sim = Simulation(parse_world(CLEANUP), "mujoco")
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     viewer = WebViewer(port=port)
-    pushed: list[Snapshot] = []
-    viewer.push_observers.append(pushed.append)
+    pushed = Taken(viewer)
     viewer.open()
     viewer.start(sim)
     try:
@@ -40,22 +49,21 @@ def started() -> Iterator[tuple[Simulation, WebViewer, list[Snapshot]]]:
         viewer.stop()
 
 
-def fresh(viewer: WebViewer, pushed: list[Snapshot]) -> Snapshot:
-    """Service the viewer until a snapshot taken from now on was pushed; the first such one (a later one does not
-    repeat what it already showed: a map, an image)."""
+def fresh(viewer: WebViewer, pushed: Taken) -> Snapshot:
+    """Service the viewer until a snapshot taken from now on was pushed by the viewer's process; the first one
+    taken from now on (a later one does not repeat what it already showed: a map, an image)."""
     since = time.perf_counter()
     viewer.set_overlay("names", True)  # forces the next snapshot at once
     deadline = since + TIMEOUT
     while time.perf_counter() < deadline:
         viewer.service(0.0)
-        taken = [snap for snap in list(pushed) if snap.wall >= since]
-        if taken:
-            return taken[0]
+        if any(report.taken >= since for report in pushed.reports):
+            return next(snap for snap in pushed if snap.wall >= since)
         time.sleep(0.002)
     raise AssertionError(f"no snapshot within {TIMEOUT} s")
 
 
-def test_lidar_points_lie_on_the_room_around_the_robot(started: tuple[Simulation, WebViewer, list[Snapshot]]) -> None:
+def test_lidar_points_lie_on_the_room_around_the_robot(started: tuple[Simulation, WebViewer, Taken]) -> None:
     sim, viewer, pushed = started
     assert fresh(viewer, pushed).scan is None  # off by default: nothing computed
     viewer.set_overlay("scan", True)
@@ -71,7 +79,7 @@ def test_lidar_points_lie_on_the_room_around_the_robot(started: tuple[Simulation
     assert np.isclose(axis[:, 0].min(), -5.0, atol=0.01) and np.isclose(axis[:, 0].max(), 5.0, atol=0.01)
 
 
-def test_contacts_mark_the_parts_that_touch(started: tuple[Simulation, WebViewer, list[Snapshot]]) -> None:
+def test_contacts_mark_the_parts_that_touch(started: tuple[Simulation, WebViewer, Taken]) -> None:
     sim, viewer, pushed = started
     viewer.set_overlay("contacts", True)
     sim.step(50)  # the items settle on the tables
@@ -84,7 +92,7 @@ def test_contacts_mark_the_parts_that_touch(started: tuple[Simulation, WebViewer
         assert np.min(np.linalg.norm(markers - wheel, axis=1)) > 1e-6
 
 
-def test_an_occupancy_grid_lies_on_the_floor(started: tuple[Simulation, WebViewer, list[Snapshot]]) -> None:
+def test_an_occupancy_grid_lies_on_the_floor(started: tuple[Simulation, WebViewer, Taken]) -> None:
     sim, viewer, pushed = started
     grid = sim.publications.declare(Publication("/map", "nav_msgs/msg/OccupancyGrid", "latched", origin="test"))
     cells = np.full((4, 6), -1, dtype=np.int8)  # 4 rows (y) x 6 columns (x), 0.5 m cells
@@ -103,7 +111,7 @@ def test_an_occupancy_grid_lies_on_the_floor(started: tuple[Simulation, WebViewe
     assert tuple(image[1, 1]) == (200, 200, 200)  # unknown
 
 
-def test_a_camera_image_is_shown(started: tuple[Simulation, WebViewer, list[Snapshot]]) -> None:
+def test_a_camera_image_is_shown(started: tuple[Simulation, WebViewer, Taken]) -> None:
     sim, viewer, pushed = started
     camera = sim.publications.declare(Publication("/robot_000/head/image", "sensor_msgs/msg/Image", "sensor",
                                                   origin="test"))
@@ -118,27 +126,28 @@ def test_a_camera_image_is_shown(started: tuple[Simulation, WebViewer, list[Snap
 
 
 def test_robot_links_are_nested_under_the_robot_and_compose_to_their_pose(
-        started: tuple[Simulation, WebViewer, list[Snapshot]]) -> None:
+        started: tuple[Simulation, WebViewer, Taken]) -> None:
     """A robot's link nodes hang under its root link's node, posed relative to it (one node moves when it drives);
     composed, every drawn link is where the backend has it, within the viewer's send threshold (0.5 mm)."""
     sim, viewer, pushed = started
     sim.robot("robot_000").set_wheel_velocity(3.0, 2.0)  # drive and turn
     sim.step(400)
     layout = next(s.layout for s in [fresh(viewer, pushed), *reversed(pushed)] if s.layout is not None)
-    scene = viewer._server.scene
     root = layout.parts.index(("robot_000", None))
-    base = scene.get_handle_by_name(f"/sigcore/f{root}")
+    base = viewer.node_pose(f"/sigcore/f{root}")  # what viser sends the browsers, in the viewer's process
+    assert base is not None
+    base_position, base_wxyz = np.array(base[0]), np.array(base[1])
     checked = 0
     for j, (entity, part) in enumerate(layout.parts):
         if entity != "robot_000" or part is None or j not in {i for i, _, _ in layout.visuals}:
             continue
-        node = scene.get_handle_by_name(f"/sigcore/f{root}/l{j}")
-        assert layout.parent[j] == root
-        position = base.position + quat_to_matrix(base.wxyz) @ node.position
+        node = viewer.node_pose(f"/sigcore/f{root}/l{j}")
+        assert node is not None and layout.parent[j] == root
+        position = base_position + quat_to_matrix(base_wxyz) @ np.array(node[0])
         np.testing.assert_allclose(position, sim.backend.get_pose("robot_000", part)[0], atol=2e-3)
         checked += 1
     assert checked >= 10  # sigbot's drawn links
-    assert np.linalg.norm(base.position[:2] - np.array([-4.0, 0.0])) > 0.1  # it did drive
+    assert np.linalg.norm(base_position[:2] - np.array([-4.0, 0.0])) > 0.1  # it did drive
 
 
 def test_meshes_and_primitives_become_viser_nodes(tmp_path: Path) -> None:

@@ -267,6 +267,15 @@ class MujocoBackend(Backend):
         self._sync()
         return self.data.xpos[body].copy(), self.data.xquat[body].copy()
 
+    def get_poses(self, parts: Sequence[tuple[str, str | None]]) -> Array:
+        """Every part's pose from ``xpos``/``xquat`` in one indexing (about a tenth of a call per part)."""
+        bodies = [self._entity(entity).body(part) for entity, part in parts]
+        self._sync()
+        out = np.empty((len(bodies), 7))
+        out[:, :3] = self.data.xpos[bodies]
+        out[:, 3:] = self.data.xquat[bodies]
+        return out
+
     def set_pose(self, entity: str, position: Array | None = None, quaternion: Array | None = None) -> None:
         """Teleport the main part: its free joint's ``qpos``, or ``body_pos``/``body_quat`` if welded."""
         e = self._entity(entity)

@@ -1,32 +1,31 @@
 """The viewer's side panel: the run's controls, the task's score and events, messages to agents, the selected
-entity, the overlays. Its callbacks (viser's threads) only queue commands; :meth:`Panel.update` (the push thread)
-shows a snapshot. One panel is shared by every browser: they all see and steer the same run."""
+entity, the overlays. It lives in the viewer's process: its callbacks (viser's threads) only send the person's
+requests to the simulation, as plain tuples (``("step", 100)``, ``("send", agent, text)``...); :meth:`Panel.update`
+(the push thread) shows a snapshot. One panel is shared by every browser: they all see and steer the same run."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from . import viewer as v
 
 if TYPE_CHECKING:
-    from .viewer import Command, Snapshot
+    from .viewer import Snapshot
 
 NONE = "(none)"
 
 
 class Panel:
-    """Builds the GUI on ``server`` and posts the person's commands with ``post``.
+    """Builds the GUI on ``server`` and sends the person's requests with ``post``.
 
     Args:
         server: The viser server.
-        post: Queues a command for the simulation thread.
-        overlays: The viewer's overlay switches (changed here, read by the snapshot).
+        post: Sends a request to the simulation's process.
+        overlays: The overlay switches of the viewer's process (changed here; the simulation is told too).
     """
 
-    def __init__(self, server: Any, post: Callable[[Command], None], overlays: dict[str, bool]) -> None:
+    def __init__(self, server: Any, post: Callable[[tuple[Any, ...]], None], overlays: dict[str, bool]) -> None:
         gui = server.gui
         self._server = server
         self._post = post
@@ -65,33 +64,37 @@ class Panel:
                 ("map", "Map (SLAM)"))}
         self._cameras = gui.add_folder("Cameras", expand_by_default=False, visible=False)
 
-        self.play.on_click(lambda _e: post(v.play))
-        self.pause.on_click(lambda _e: post(v.pause))
-        self.step.on_click(lambda _e: post(v.step(self.steps.value)))
-        self.reset.on_click(lambda _e: post(v.reset))
-        self.pace.on_update(lambda _e: post(v.set_pace(self.pace.value)))
-        self.send.on_click(lambda _e: post(v.send_message("" if self.to.value == NONE else self.to.value,
-                                                         self.message.value)))
+        self.play.on_click(lambda _e: post(("play",)))
+        self.pause.on_click(lambda _e: post(("pause",)))
+        self.step.on_click(lambda _e: post(("step", self.steps.value)))
+        self.reset.on_click(lambda _e: post(("reset",)))
+        self.pace.on_update(lambda _e: post(("pace", self.pace.value)))
+        self.send.on_click(lambda _e: post(("send", "" if self.to.value == NONE else self.to.value,
+                                            self.message.value)))
         self.entity.on_update(lambda _e: self._entity_picked())
         self.drag.on_update(lambda _e: self._entity_picked())
         for key, box in self.switches.items():
-            box.on_update(lambda _e, key=key, box=box: self._overlays.__setitem__(key, bool(box.value)))
-        self._select_cb: Callable[[str], None] | None = None
-        self._move_cb: Callable[[str, np.ndarray, np.ndarray], None] | None = None
+            box.on_update(lambda _e, key=key, box=box: self._switched(key, bool(box.value)))
 
-    def bind(self, select: Callable[[str], None], move: Callable[[str, np.ndarray, np.ndarray], None]) -> None:
-        """What picking an entity and dragging it do (the viewer queues them as commands)."""
-        self._select_cb, self._move_cb = select, move
+    def _switched(self, key: str, on: bool) -> None:
+        self._overlays[key] = on
+        self._post(("overlay", key, on))
+
+    def show_switch(self, key: str, on: bool) -> None:
+        """The simulation's process turned overlay ``key`` on or off: show the switch so."""
+        box = self.switches.get(key)
+        if box is not None and bool(box.value) != on:
+            box.value = on
 
     def _entity_picked(self) -> None:
         name = self.entity.value
-        if name != NONE and self._select_cb is not None:
-            self._select_cb(name)
-        elif name == NONE:
+        if name != NONE:
+            self._post(("select", name))
+        else:
             self._hide_drag()
 
-    # ------------------------------------------------------------------ from the simulation thread
-    def selected(self, name: str, pose: tuple[np.ndarray, np.ndarray] | None) -> None:
+    # ------------------------------------------------------------------ told by the simulation's process
+    def selected(self, name: str, pose: tuple[Any, Any] | None) -> None:
         """``name`` was selected: show it in the list and put the drag handle on it (if it is on)."""
         if self.entity.value != name and name in self.entity.options:
             self.entity.value = name
@@ -107,8 +110,7 @@ class Panel:
             handle = self._drag
 
             def moved(_e: Any, name: str = name) -> None:
-                if self._move_cb is not None:
-                    self._move_cb(name, np.array(handle.position), np.array(handle.wxyz))
+                self._post(("move", name, [float(x) for x in handle.position], [float(x) for x in handle.wxyz]))
             handle.on_update(moved)
         else:
             self._drag.position, self._drag.wxyz = position, wxyz

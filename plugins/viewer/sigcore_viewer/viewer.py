@@ -1,28 +1,31 @@
 """The web viewer: a :class:`sigcore.viewer.Viewer` serving the world live to any browser through viser.
 
-Three threads, each with its own job:
+Two processes, so that the browser's side never takes the simulation's interpreter (its GIL):
 
-* the **simulation thread** calls :meth:`WebViewer.service` between steps. It runs the person's commands (queued by
-  the browser callbacks) and, at most ``rate`` times a second of wall time, takes a :class:`Snapshot`: every frame's
-  pose read from the backend, the run's state, the texts to show. Nothing else of the viewer touches the
-  simulation;
-* the **push thread** turns the newest snapshot into viser updates (only what changed is sent); a snapshot it had no
-  time for is replaced by the next one, so a slow browser never slows the simulation;
-* **viser's threads** serve the page and call the GUI callbacks, which only queue commands.
+* in the **simulation's process**, :class:`WebViewer` is serviced between steps. It runs the person's requests
+  (which arrive from the viewer's process) and, at most ``rate`` times a second of wall time, takes a
+  :class:`Snapshot` - every frame's pose read from the backend, the run's state, the texts to show - and writes it
+  to a Unix socket without ever blocking (a snapshot the socket has no room for is not taken; the next one is).
+  Nothing else of the viewer touches the simulation;
+* the **viewer's process** (:mod:`sigcore_viewer.front`, started by :meth:`WebViewer.open`) runs viser's server, the
+  scene and the panel: it turns the newest snapshot into viser updates (only what changed is sent; one it had no
+  time for is replaced by the next, so a slow browser never slows the simulation) and sends the person's controls
+  back as plain requests. It ends with the simulation's process.
 """
 
 from __future__ import annotations
 
-import contextlib
-import io
+import collections
 import logging
 import math
-import queue
+import select
 import socket
-import threading
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from time import perf_counter
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -36,8 +39,8 @@ from sigcore.text import clip, quote
 from sigcore.viewer import DEFAULT_PORT, VIEWER_SENDER, Viewer, ViewerError
 from sigcore.world.models import Object
 
-from .panel import Panel
-from .scenebuild import SceneLayout, SceneNodes, layout_of
+from .scenebuild import SceneLayout, layout_of
+from .wire import Inbox, Outbox, PeerGone, receive, tune
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
@@ -46,6 +49,16 @@ log = logging.getLogger("sigcore.viewer")
 
 Command = Callable[["Simulation"], "str | None"]
 """What a person asked, run on the simulation thread between steps; returns a note to show, or None."""
+
+UNLOADED = (-1, -1)
+"""The layout key while no world is loaded."""
+
+POLL = 0.005
+"""Wall seconds between two reads of the person's requests while the simulation runs (a click takes effect within
+this and a step)."""
+
+OVERLAYS = {"names": True, "frames": False, "scan": False, "contacts": False, "map": True}
+"""The overlays and whether each is on at the start."""
 
 PACES: dict[str, float | None] = {"real time": 1.0, "0.25x": 0.25, "0.5x": 0.5, "2x": 2.0, "5x": 5.0,
                                   "10x": 10.0, "as fast as possible": None}
@@ -93,6 +106,22 @@ class Snapshot:
     grid: tuple[np.ndarray, float, float, np.ndarray, np.ndarray] | None = None
     images: dict[str, np.ndarray] = field(default_factory=dict)
     pace: str = "real time"
+
+
+@dataclass(frozen=True)
+class Pushed:
+    """The viewer's process handed a snapshot to viser, which sends it to the browsers.
+
+    Attributes:
+        step: The snapshot's step.
+        taken: When it was taken (:attr:`Snapshot.wall`, ``time.perf_counter()`` of the simulation's process) [s].
+        handed: When it was handed to viser, on the same clock (``perf_counter`` is the machine's monotonic clock,
+            shared by its processes) [s].
+    """
+
+    step: int
+    taken: float
+    handed: float
 
 
 class _Displays(PublicationSink):
@@ -156,57 +185,66 @@ class _Displays(PublicationSink):
 
 
 class WebViewer(Viewer):
-    """The browser viewer (viser). See :class:`sigcore.viewer.Viewer` for the arguments."""
+    """The browser viewer (viser, in a process of its own). See :class:`sigcore.viewer.Viewer` for the arguments."""
 
     name = "web"
+    READY_TIMEOUT = 60.0
+    """Wall seconds the viewer's process may take to import viser and listen (about 1 s; generous for a loaded
+    machine)."""
 
     def __init__(self, host: str = "127.0.0.1", port: int | None = None, rate: float = 30.0) -> None:
         super().__init__(host, port, rate)
-        self._server: Any = None
+        self._proc: subprocess.Popen[bytes] | None = None
+        self._sock: socket.socket | None = None
+        self._outbox: Outbox | None = None
+        self._inbox: Inbox | None = None
+        self._listening: int | None = None
         self._sim: Simulation | None = None
-        # queue.Queue, not SimpleQueue: SimpleQueue.get(timeout=...) on the main thread can block for good when a
-        # signal (Ctrl-C, SIGTERM) arrives during the wait (seen with CPython 3.11); Queue waits on a Condition
-        self._commands: queue.Queue[Command] = queue.Queue()
+        self._commands: collections.deque[Command] = collections.deque()
         self._displays = _Displays()
         self._layout: SceneLayout | None = None
         self._layout_key: tuple[int, int] | None = None
         self._next_snapshot = 0.0
+        self._next_poll = 0.0
+        self._due = 0.0  # the earlier of the two: service() does nothing before
         self._selected: str | None = None
         self._notes: list[str] = []
-        self._overlays = {"names": True, "frames": False, "scan": False, "contacts": False, "map": True}
+        self._overlays = dict(OVERLAYS)
         self._rtf_window: list[tuple[float, float]] = []  # (wall, elapsed sim time) of recent snapshots
         self._wall0 = 0.0
         self._grid_sent = -1
         self._images_sent: dict[str, int] = {}
-        self._mailbox: Snapshot | None = None
-        self._wake = threading.Condition()
-        self._stopping = False
-        self._pusher: threading.Thread | None = None
-        self._panel: Panel | None = None
-        self._nodes: SceneNodes | None = None
+        self._probed: dict[str, Any] = {}
         self.pushed = 0
-        """Snapshots the push thread has sent to viser (for tests and the bench)."""
-        self.push_failures = 0
-        """Snapshots the push thread failed to send (logged: the first, then every 100th)."""
-        self.push_observers: list[Callable[[Snapshot], None]] = []
-        """Called on the push thread once each snapshot was handed to viser, which sends it to the browsers (the
-        bench measures the latency with it)."""
+        """Snapshots the viewer's process has handed to viser, which sends them to the browsers (as reported)."""
+        self.push_observers: list[Callable[[Pushed], None]] = []
+        """Called on the simulation thread (in :meth:`service`) with each report of a snapshot handed to viser
+        (the bench measures the latency with it)."""
+        self.snapshot_observers: list[Callable[[Snapshot], None]] = []
+        """Called on the simulation thread with each snapshot taken, before it is sent."""
 
-    # ------------------------------------------------------------------ the server
+    # ------------------------------------------------------------------ the viewer's process
     @property
     def url(self) -> str:
-        if self._server is None:
+        if self._listening is None:
             raise ViewerError("the viewer is not open yet (open() or start())")
         host = "127.0.0.1" if self.host in ("0.0.0.0", "") else self.host
-        return f"http://{host}:{self._server.get_port()}"
+        return f"http://{host}:{self._listening}"
+
+    @property
+    def process_id(self) -> int | None:
+        """The viewer's process (viser's server), or None when it is not running."""
+        return self._proc.pid if self._proc is not None and self._proc.poll() is None else None
 
     def open(self) -> None:
-        """Listen on the port (the next free one from 8080 when none was given); :attr:`url` is known after.
+        """Start the viewer's process, listening on the port (the next free one from 8080 when none was given);
+        :attr:`url` is known after.
 
         Raises:
-            ViewerError: the port given is taken, or no port from 8080 to 8179 is free.
+            ViewerError: the port given is taken, no port from 8080 to 8179 is free, or the viewer's process could
+                not start (the message says why).
         """
-        if self._server is not None:
+        if self._proc is not None:
             return
         if self.port is not None:
             if not _free(self.host, self.port):
@@ -221,30 +259,45 @@ class WebViewer(Viewer):
             port = found
             if port != DEFAULT_PORT:
                 log.warning("viewer: port %d is in use; the viewer listens on port %d", DEFAULT_PORT, port)
-        import viser
-
-        logging.getLogger("websockets").setLevel(logging.CRITICAL)  # a connection that is no websocket (a probe)
-        with contextlib.redirect_stdout(io.StringIO()):  # viser prints its own banner; sigcore says the URL
-            self._server = viser.ViserServer(host=self.host, port=port, label="sigcore", verbose=False)
-        if self._server.get_port() != port:
+        ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_STREAM)
+        tune(ours)
+        tune(theirs)
+        command = [sys.executable, "-m", "sigcore_viewer.front", "--fd", str(theirs.fileno()), "--host", self.host,
+                   "--port", str(port), *(f"--overlay={k}={int(v)}" for k, v in self._overlays.items())]
+        try:
+            proc = subprocess.Popen(command, pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
+                                    stdout=subprocess.DEVNULL)
+        except OSError as e:
+            ours.close()
+            raise ViewerError(f"the viewer's process could not start: {e}") from None
+        finally:
+            theirs.close()
+        ours.settimeout(self.READY_TIMEOUT)
+        try:
+            answer = receive(ours)
+        except (PeerGone, TimeoutError, ValueError) as e:
+            _end(proc)
+            ours.close()
+            raise ViewerError(f"the viewer's process ended or did not answer within {self.READY_TIMEOUT:g} s "
+                              f"(exit code {proc.returncode}; its error is printed above): {e}") from None
+        if answer[0] != "ready":
+            _end(proc)
+            ours.close()
+            raise ViewerError(f"the viewer could not listen on {self.host}:{port}: {answer[1]}")
+        self._listening = int(answer[1])
+        if self._listening != port:
             log.warning("viewer: port %d was taken meanwhile; the viewer listens on port %d", port,
-                        self._server.get_port())
+                        self._listening)
+        ours.setblocking(False)
+        self._proc, self._sock, self._outbox, self._inbox = proc, ours, Outbox(ours), Inbox(ours)
 
     def start(self, sim: Simulation) -> None:
         self.open()
         self._sim = sim
         self._wall0 = time.perf_counter()
-        server = self._server
-        server.scene.set_up_direction("+z")
-        self._nodes = SceneNodes(server, self._post_select)
-        self._panel = Panel(server, self._post, self._overlays)
-        self._panel.bind(self._post_select, self._post_move)
         sim.publications.connect(self._displays)
         sim.world_observers.append(self._world_changed)
         sim.reset_observers.append(self._displays.restart)
-        self._stopping = False
-        self._pusher = threading.Thread(target=self._push_loop, name="sigcore-viewer-push", daemon=True)
-        self._pusher.start()
         self._snapshot(force_layout=True)
 
     def stop(self) -> None:
@@ -256,41 +309,113 @@ class WebViewer(Viewer):
             if self._displays.restart in sim.reset_observers:
                 sim.reset_observers.remove(self._displays.restart)
             self._sim = None  # service() after stop() does nothing
-        with self._wake:
-            self._stopping = True
-            self._wake.notify_all()
-        if self._pusher is not None:
-            self._pusher.join(timeout=5.0)
-            self._pusher = None
-        if self._server is not None:
+        if self._outbox is not None and self._sock is not None:
             try:
-                with contextlib.redirect_stdout(io.StringIO()):
-                    self._server.stop()
-            except Exception:  # viser's own shutdown; the run's results matter more
-                log.debug("viewer: stopping viser raised", exc_info=True)
-            self._server = None
+                self._outbox.put(("stop",))
+                deadline = time.monotonic() + 2.0
+                while not self._outbox.flush() and time.monotonic() < deadline:
+                    select.select([], [self._sock], [], 0.1)
+            except PeerGone:
+                pass
+        if self._sock is not None:
+            self._sock.close()
+        if self._proc is not None:
+            _end(self._proc)
+        self._proc, self._sock, self._outbox, self._inbox, self._listening = None, None, None, None, None
 
     # ------------------------------------------------------------------ the simulation thread
     def service(self, timeout: float) -> None:
+        """Between two steps: act on the person's requests (the socket is read at most every :data:`POLL` seconds
+        unless ``timeout`` asks to wait: a read that finds nothing costs more than a step's share), then take and
+        send a snapshot when one is due and the socket took the last one. Called at every step: when nothing is
+        due it returns after one clock reading."""
+        if timeout <= 0.0 and not self._commands and perf_counter() < self._due:
+            return
         sim = self._sim
         if sim is None:
             return
-        first = None
-        if timeout > 0 or not self._commands.empty():  # the check costs a fifth of a get that finds nothing
-            try:
-                first = self._commands.get(timeout=timeout) if timeout > 0 else self._commands.get_nowait()
-            except queue.Empty:
-                pass
-        while first is not None:
-            self._run(sim, first)
-            try:
-                first = self._commands.get_nowait()
-            except queue.Empty:
-                first = None
-        now = time.perf_counter()
-        if now >= self._next_snapshot:
+        now = perf_counter()
+        if self._sock is not None and (timeout > 0 or now >= self._next_poll):
+            self._next_poll = now + POLL
+            if timeout > 0 and not self._commands:
+                select.select([self._sock], [], [], timeout)
+            self._receive(sim)
+            self._flush()
+        while self._commands:
+            self._run(sim, self._commands.popleft())
+        if now >= self._next_snapshot and self._flush():  # no room in the socket yet: the next service tries again
             self._next_snapshot = now + 1.0 / self.rate
             self._snapshot()
+        self._due = min(self._next_poll, self._next_snapshot)
+
+    def _receive(self, sim: Simulation) -> None:
+        """Act on what the viewer's process sent: the person's requests, reports of pushed snapshots."""
+        assert self._inbox is not None
+        try:
+            messages = self._inbox.read()
+        except (PeerGone, ValueError) as e:
+            self._lost(e)
+            return
+        for message in messages:
+            kind = message[0]
+            if kind == "pushed":
+                self.pushed += 1
+                report = Pushed(*message[1:])
+                for observer in list(self.push_observers):
+                    observer(report)
+            elif kind == "probed":
+                self._probed[message[1]] = message[2]
+            else:
+                self._run(sim, self._request(message))
+
+    def _request(self, message: tuple[Any, ...]) -> Command:
+        """The command a person's request (from the panel, in the viewer's process) stands for."""
+        kind, args = message[0], message[1:]
+        simple: dict[str, Command] = {"play": play, "pause": pause, "reset": reset}
+        if kind in simple and not args:
+            return simple[kind]
+        made: dict[str, Callable[..., Command]] = {
+            "step": step, "pace": set_pace, "send": send_message, "select": self._select_command,
+            "move": self._move_command, "overlay": self._overlay_command}
+        if kind in made:
+            try:
+                return made[kind](*args)
+            except TypeError:
+                pass
+        return lambda sim: f"the viewer sent a request sigcore does not know: {clip(repr(message), 80)}"
+
+    def _flush(self) -> bool:
+        """Send what waits for the socket; whether the viewer's process is there and everything was sent."""
+        if self._outbox is None:
+            return False
+        try:
+            return self._outbox.flush()
+        except PeerGone as e:
+            self._lost(e)
+            return False
+
+    def _send(self, message: tuple[Any, ...]) -> None:
+        if self._outbox is None:
+            return
+        try:
+            self._outbox.put(message)
+        except PeerGone as e:
+            self._lost(e)
+
+    def _lost(self, error: Exception) -> None:
+        """The viewer's process ended (or sent what is no message): go on without it."""
+        code = self._proc.poll() if self._proc is not None else None
+        log.warning("viewer: its process ended (exit code %s: %s); the simulation goes on without the viewer",
+                    code, error)
+        if self._sock is not None:
+            self._sock.close()
+        if self._proc is not None:
+            _end(self._proc)
+        self._sock, self._outbox, self._inbox = None, None, None
+
+    def _post(self, command: Command) -> None:
+        """Queue ``command`` to run on the simulation thread at the next :meth:`service`."""
+        self._commands.append(command)
 
     def _run(self, sim: Simulation, command: Command) -> None:
         """Run a person's command; what it answers, or what went wrong, becomes a note (never an exception)."""
@@ -303,7 +428,7 @@ class WebViewer(Viewer):
             note = f"that did not work: {type(e).__name__}: {clip(str(e))}"
         if note:
             self._note(note)
-        self._next_snapshot = 0.0  # show the effect at once
+        self._next_snapshot = self._due = 0.0  # show the effect at once
 
     def _note(self, text: str) -> None:
         stamp = self._sim.time if self._sim is not None and self._sim.loaded else 0.0
@@ -316,26 +441,22 @@ class WebViewer(Viewer):
             self._selected = None
 
     def _snapshot(self, force_layout: bool = False) -> None:
+        """Take a snapshot and send it to the viewer's process."""
         sim = self._sim
         assert sim is not None
         wall = time.perf_counter()
         layout = None
         if not sim.loaded:
-            self._layout, self._layout_key = layout_of(None), None
-            layout = self._layout
+            if force_layout or self._layout_key != UNLOADED or self._layout is None:  # once, not at every update
+                self._layout, self._layout_key = layout_of(None), UNLOADED
+                layout = self._layout
         else:
             key = (id(sim.scene), sim.scene.version)
             if force_layout or key != self._layout_key or self._layout is None:
                 self._layout, self._layout_key = layout_of(sim), key
                 layout = self._layout
         assert self._layout is not None
-        poses = np.empty((len(self._layout.frames), 7))
-        if sim.loaded:
-            backend = sim.backend
-            for i, (entity, part) in enumerate(self._layout.parts):
-                pos, quat = backend.get_pose(entity, part)
-                poses[i, :3] = pos
-                poses[i, 3:] = quat
+        poses = sim.backend.get_poses(self._layout.parts) if sim.loaded else np.empty((0, 7))
         control = sim.control
         self._rtf_window.append((wall, sim.elapsed_time))
         while len(self._rtf_window) > 2 and wall - self._rtf_window[0][0] > 2.0:
@@ -373,17 +494,9 @@ class WebViewer(Viewer):
                     image = _image(value)
                     if image is not None:
                         snap.images[topic] = image
-        with self._wake:
-            previous = self._mailbox
-            if previous is not None and snap.layout is None and previous.layout is not None:
-                snap.layout = previous.layout  # a layout the push thread has not seen yet is kept
-            if previous is not None and snap.grid is None:
-                snap.grid = previous.grid
-            if previous is not None:  # images the push thread has not shown yet are kept (the newer win)
-                for topic, image in previous.images.items():
-                    snap.images.setdefault(topic, image)
-            self._mailbox = snap
-            self._wake.notify()
+        for observer in list(self.snapshot_observers):
+            observer(snap)
+        self._send(("snap", snap))
 
     def _describe(self, sim: Simulation, name: str | None) -> str:
         """The state of the selected entity (pose, velocity, tags, who grasps it, joint angles)."""
@@ -448,75 +561,71 @@ class WebViewer(Viewer):
             points.append(pos)
         return np.array(points, dtype=float).reshape(-1, 3)
 
-    # ------------------------------------------------------------------ the push thread
-    def _push_loop(self) -> None:
-        while True:
-            with self._wake:
-                while self._mailbox is None and not self._stopping:
-                    self._wake.wait()
-                if self._stopping:
-                    return
-                snap, self._mailbox = self._mailbox, None
-            assert snap is not None
-            try:
-                self._push(snap)
-            except Exception:  # a browser or viser failure must not stop the simulation: log and go on
-                self.push_failures += 1
-                if self.push_failures == 1 or self.push_failures % 100 == 0:
-                    log.exception("viewer: sending an update failed (%d so far; the simulation goes on)",
-                                  self.push_failures)
-                time.sleep(0.1)
+    # ------------------------------------------------------------------ the person's selection, drags, overlays
+    def _select_command(self, name: str) -> Command:
+        return lambda sim: self.select(sim, name)
 
-    def _push(self, snap: Snapshot) -> None:
-        assert self._nodes is not None and self._panel is not None
-        server = self._server
-        if server is None:
-            return
-        with server.atomic():
-            if snap.layout is not None:
-                self._nodes.build(snap.layout, self._overlays)
-            self._nodes.move(snap.poses, self._overlays["frames"])
-            self._nodes.overlays(snap, self._overlays)
-            self._panel.update(snap)
-        self.pushed += 1
-        for observer in list(self.push_observers):
-            observer(snap)
-
-    # ------------------------------------------------------------------ commands (queued by viser's threads)
-    def _post(self, command: Command) -> None:
-        self._commands.put(command)
-
-    def _post_select(self, name: str) -> None:
-        self._post(lambda sim: self.select(sim, name))
-
-    def _post_move(self, name: str, position: np.ndarray, wxyz: np.ndarray) -> None:
+    def _move_command(self, name: str, position: Any, wxyz: Any) -> Command:
         def run(sim: Simulation) -> str | None:
-            note = move_entity(name, position, wxyz)(sim)
-            if note is not None and self._panel is not None and name in sim.agents:
-                self._panel.selected(name, self._drag_pose(sim, name))  # the handle goes back where it is
+            note = move_entity(name, np.asarray(position, dtype=float), np.asarray(wxyz, dtype=float))(sim)
+            if note is not None and name in sim.agents:
+                self._send(("selected", name, self._drag_pose(sim, name)))  # the handle goes back where it is
             return note
-        self._post(run)
+        return run
+
+    def _overlay_command(self, key: str, on: bool) -> Command:
+        def run(sim: Simulation) -> str | None:
+            if key not in self._overlays:
+                return f"unknown overlay {quote(str(key))}; valid: {', '.join(self._overlays)}"
+            self._overlays[key] = bool(on)
+            return None
+        return run
 
     def select(self, sim: Simulation, name: str) -> str | None:
         """Select entity ``name`` (its state is shown and the drag handle attached to it)."""
         if name not in sim.agents:
             return f"no entity {quote(name)} to select; entities: {', '.join(sim.entity_names) or 'none'}"
         self._selected = name
-        if self._panel is not None:
-            self._panel.selected(name, self._drag_pose(sim, name))
+        self._send(("selected", name, self._drag_pose(sim, name)))
         return None
 
-    def _drag_pose(self, sim: Simulation, name: str) -> tuple[np.ndarray, np.ndarray] | None:
+    def _drag_pose(self, sim: Simulation, name: str) -> tuple[list[float], list[float]] | None:
         try:
             pos, quat = sim.backend.get_pose(name)
         except Exception:
             return None
-        return np.asarray(pos, dtype=float), np.asarray(quat, dtype=float)
+        return [float(x) for x in pos], [float(x) for x in quat]
 
     def set_overlay(self, key: str, on: bool) -> None:
-        """Turn an overlay on or off (``names``, ``frames``, ``scan``, ``contacts``, ``map``)."""
+        """Turn an overlay on or off (``names``, ``frames``, ``scan``, ``contacts``, ``map``); the panel's switch
+        follows.
+
+        Raises:
+            ViewerError: ``key`` is no overlay.
+        """
+        if key not in self._overlays:
+            raise ViewerError(f"unknown overlay {key!r}; valid: {', '.join(self._overlays)}")
         self._overlays[key] = on
-        self._next_snapshot = 0.0
+        self._next_snapshot = self._due = 0.0
+        self._send(("overlay", key, on))
+
+    def node_pose(self, name: str, timeout: float = 10.0) -> tuple[list[float], list[float]] | None:
+        """What viser in the viewer's process holds for scene node ``name`` (position, quaternion w x y z,
+        relative to its parent node): what the browsers are sent. None when there is no such node. Serves the
+        viewer while it waits (call it from the simulation thread; for tests and benches).
+
+        Raises:
+            ViewerError: the viewer's process did not answer within ``timeout`` seconds.
+        """
+        self._probed.pop(name, None)
+        self._send(("probe", name))
+        deadline = time.monotonic() + timeout
+        while name not in self._probed:
+            if self._sock is None or time.monotonic() > deadline:
+                raise ViewerError(f"the viewer's process did not say where node {name!r} is within {timeout:g} s")
+            self.service(0.01)
+        pose: tuple[list[float], list[float]] | None = self._probed.pop(name)
+        return pose
 
 
 # ------------------------------------------------------------------ the person's commands
@@ -614,6 +723,19 @@ def move_entity(name: str, position: np.ndarray, wxyz: np.ndarray) -> Command:
 
 
 # ------------------------------------------------------------------ helpers
+def _end(proc: subprocess.Popen[bytes]) -> None:
+    """Wait for the viewer's process to end (it ends when told, or when its socket closes); stop it if it hangs."""
+    try:
+        proc.wait(timeout=5.0)
+    except subprocess.TimeoutExpired:
+        proc.terminate()
+        try:
+            proc.wait(timeout=5.0)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
 def _free(host: str, port: int) -> bool:
     """Whether ``port`` can be bound on ``host`` now."""
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
