@@ -3,7 +3,9 @@
 # tools, ROS 2 Jazzy's rclpy from PyPI and the Python typesupport of the interface packages (tf2_msgs,
 # simulation_interfaces, sigcore_msgs) built from interfaces/ and cached in ~/.cache/sigcore/interfaces.
 # The viewer's browser tests need Debian's chromium and chromium-driver: installed with apt-get when run as root,
-# else the command to run is printed (SIGCORE_NO_BROWSER=1 skips them).
+# else the command to run is printed (SIGCORE_NO_BROWSER=1 skips them). Cameras render headless through Mesa's EGL
+# and OSMesa (software, llvmpipe, when there is no GPU): libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6, installed
+# the same way.
 # Idempotent: a second run only checks. Usage: bash scripts/setup.sh   (SIGCORE_NO_ROS=1 skips ROS 2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -45,6 +47,21 @@ if [ -z "${SIGCORE_NO_BROWSER:-}" ] && ! { [ -x /usr/bin/chromium ] && [ -x /usr
   else
     echo "setup: the viewer's browser tests need chromium and chromium-driver; as root run:" \
       "apt-get install -y chromium chromium-driver   (or set SIGCORE_NO_BROWSER=1 to skip those tests)" >&2
+  fi
+fi
+gl_libs=(libEGL.so.1 libEGL_mesa.so.0 libOSMesa.so.8)
+missing_gl=0
+for lib in "${gl_libs[@]}"; do
+  ldconfig -p 2>/dev/null | grep -q "$lib" || missing_gl=1
+done
+if [ "$missing_gl" = 1 ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    echo "setup: installing Mesa's EGL and OSMesa (cameras render headless on the CPU)"
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+      libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6 >/dev/null
+  else
+    echo "setup: cameras need OpenGL without a display; as root run:" \
+      "apt-get install -y libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6" >&2
   fi
 fi
 "$V/sigcore" plugins

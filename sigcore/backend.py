@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -228,6 +229,76 @@ class Backend(ABC):
         Returns:
             (N,) distances [m]; ``inf`` where nothing is hit within ``max_range``.
         """
+
+    # ------------------------------------------------------------------ cameras (optional)
+    def renderer(self) -> Renderer:
+        """A renderer of this backend's world for cameras (created once per backend and kept by the caller).
+
+        Raises:
+            BackendError: the backend cannot render (the default), or its renderer cannot start (no OpenGL: the
+                message names the system packages to install).
+        """
+        raise BackendError(f"the {self.name} backend cannot render camera images; backends that can: mujoco, "
+                           "bullet")
+
+
+@dataclass(frozen=True)
+class CameraView:
+    """One pinhole view to render, in the world frame.
+
+    Attributes:
+        position: (3,) the optical centre [m].
+        rotation: (3, 3) the optical frame's axes as columns (REP-103 optical: x right, y down, z forward).
+        width: Image width [px].
+        height: Image height [px].
+        focal: Focal length [px] (square pixels).
+        cx: Principal point, column [px] (pixel centres at integers).
+        cy: Principal point, row [px].
+        near: Nearest rendered distance along z [m].
+        far: Farthest rendered distance along z [m].
+        rgb: Whether to return colours.
+        depth: Whether to return depth.
+    """
+
+    position: Array
+    rotation: Array
+    width: int
+    height: int
+    focal: float
+    cx: float
+    cy: float
+    near: float
+    far: float
+    rgb: bool = True
+    depth: bool = True
+
+
+Image = npt.NDArray[np.generic]
+
+
+class Renderer(ABC):
+    """Renders camera views of a backend's world (:meth:`Backend.renderer`).
+
+    The simulation takes a :meth:`snapshot` on its own thread at the step an image belongs to; :meth:`render` then
+    draws that snapshot, on another thread when :attr:`threaded` (the backend's state may have moved on by then),
+    else at once on the simulation's thread.
+    """
+
+    threaded: ClassVar[bool] = False
+    """Whether :meth:`render` may run on another thread, concurrently with :meth:`Backend.step`."""
+
+    @abstractmethod
+    def snapshot(self) -> object:
+        """What :meth:`render` needs of the current state (a copy: the backend may step on)."""
+
+    @abstractmethod
+    def render(self, snapshot: object, views: Sequence[CameraView]) -> list[tuple[Image | None, Image | None]]:
+        """Draw every view of ``snapshot``: per view ``(rgb, depth)``, rgb as (height, width, 3) uint8 (row 0 at
+        the top), depth as (height, width) float32 distances along the optical axis [m] (+inf beyond ``far`` or
+        where nothing is); None for what the view did not ask for."""
+
+    def close(self) -> None:  # noqa: B027 - optional
+        """Free the renderer's resources (on the thread that rendered); default: nothing."""
 
 
 class BackendError(SigcoreError, RuntimeError):

@@ -22,6 +22,7 @@ from .world import WorldError, parse_world
 if TYPE_CHECKING:
     from .sim import Simulation
     from .sim.startgate import StartGate
+    from .sim.video import VideoRecorder
     from .transport import Transport
     from .viewer import Viewer
     from .world import World
@@ -234,6 +235,18 @@ def _check_pace(fast: bool, realtime: bool, factor: float | None) -> None:
                      "--realtime (= --factor 1) or --factor F (F times real time)"])
 
 
+def _video(sim: Simulation, path: Path | None, camera: str, fps: float) -> VideoRecorder | None:
+    """The recorder of ``--video`` (its encoder started), or None."""
+    if path is None:
+        return None
+    from .sim.video import VideoError, VideoRecorder
+
+    try:
+        return VideoRecorder(sim, path, camera, fps)
+    except VideoError as e:
+        raise _fail([str(e)]) from None
+
+
 def _viewer(enabled: bool, host: str, port: int | None, rate: float) -> Viewer | None:
     """The viewer to start beside the transport (``--viewer``), listening already (its URL known), or None."""
     from .viewer import DEFAULT_VIEWER, ViewerError
@@ -301,6 +314,13 @@ def run(
     viewer_host: ViewerHost = "127.0.0.1",
     viewer_port: ViewerPort = None,
     viewer_rate: ViewerRate = 30.0,
+    video: Annotated[Path | None, typer.Option(
+        "--video", metavar="OUT.mp4", help="render the run into an MP4 at the simulated pace (time and score in a "
+        "corner)")] = None,
+    video_camera: Annotated[str, typer.Option(
+        "--video-camera", metavar="NAME", help="the video's view: 'overview' (the whole room) or a robot's camera "
+        "(NAME or ROBOT/NAME)")] = "overview",
+    video_fps: Annotated[float, typer.Option("--video-fps", help="video frames per simulated second [Hz]")] = 30.0,
 ) -> None:
     """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
     stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed. Arguments after
@@ -330,6 +350,7 @@ def run(
     sim.world_sources = list(worlds or [])
     _check_endpoints(transport_obj, sim)
     gate = _gate(wait_for, wait_timeout, paused, transport_obj, sim)
+    recorder = _video(sim, video, video_camera, video_fps)
     viewer_obj = _viewer(viewer, viewer_host, viewer_port, viewer_rate)  # listening now: a taken port is exit 2
     total = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     show_progress = not quiet and total is not None
@@ -373,6 +394,9 @@ def run(
                          progress_every=2.0 if not tty else 0.25, started=started, gate=gate)
     except KeyboardInterrupt as e:  # a second signal while stopping
         raise _fail([f"interrupted{f' ({e})' if str(e) else ''}: no results"], 130) from None
+    finally:
+        if recorder is not None:
+            recorder.close()
     if tty and show_progress:
         err.print(" " * 70, end="\r")
     for kind in ("robot", "object", "human", "agent"):
@@ -399,6 +423,9 @@ def run(
             out.print(f"  {name}: {summary}")
     for line in report.report_lines:
         out.print(line)
+    if recorder is not None:
+        out.print(f"  video:    {recorder.path} ({recorder.frames} frames, {recorder.duration:.2f} s at "
+                  f"{recorder.fps:.4g} fps)")
     if report.error is not None:
         raise typer.Exit(3)  # the run could not go on (a transport or a bug), the report above says why
     if report.outcome is False:

@@ -135,6 +135,11 @@ class PublicationSink(ABC):
     def withdraw(self, publication: Publication) -> None:  # noqa: B027 - optional, does nothing by default
         """Remove the endpoint of ``publication`` (its agent was deleted while running); default: nothing."""
 
+    def wants(self, publication: Publication) -> bool:
+        """Whether values of ``publication`` reach anyone now (ROS 2: it has subscribers); default: True. Costly
+        values (camera images) are computed only when some sink wants them."""
+        return True
+
 
 class Publisher:
     """The handle a declarer pushes values through (returned by :meth:`Publications.declare`)."""
@@ -147,6 +152,11 @@ class Publisher:
     def active(self) -> bool:
         """Whether anything receives the values (build costly values only then; latched ones are kept anyway)."""
         return self._owner.has_sinks
+
+    @property
+    def wanted(self) -> bool:
+        """Whether some sink wants the values now (:meth:`PublicationSink.wants`): render an image only then."""
+        return self._owner.wanted(self.publication)
 
     def publish(self, value: dict[str, Any], stamp_ns: int | None = None) -> None:
         """Push ``value`` (a field dictionary of the declared type), stamped with ``stamp_ns`` [ns] (default: the
@@ -232,6 +242,17 @@ class Publications:
             self._call(sink, "declare", sink.declare, publication)
         for topic, (stamp, value) in self._latched.items():
             self._call(sink, "publish", sink.publish, self._declared[topic], stamp, value)
+
+    def wanted(self, publication: Publication) -> bool:
+        """Whether any connected sink wants values of ``publication`` now (a sink that fails to say counts as
+        wanting them)."""
+        for sink in self._sinks:
+            try:
+                if sink.wants(publication):
+                    return True
+            except Exception:
+                return True
+        return False
 
     def disconnect(self, sink: PublicationSink) -> None:
         """Stop delivering to ``sink`` (no error if it was not connected)."""

@@ -68,7 +68,7 @@ def test_api_lists_every_agent() -> None:
     """`sigcore api WORLD` lists each agent with its endpoint count, the other endpoints and the total."""
     r = sigcore("api", str(WORLD))
     assert r.returncode == 0
-    assert "bot (robot): 51 endpoints" in r.stdout and "7 agents, 320 agent endpoints, 34 others, 354 in all" in \
+    assert "bot (robot): 53 endpoints" in r.stdout and "7 agents, 322 agent endpoints, 34 others, 356 in all" in \
         r.stdout
     assert "/tf_static" in r.stdout and "/bot/cmd_vel" in r.stdout
 

@@ -20,6 +20,7 @@ from pydantic.fields import FieldInfo
 from sigcore.world import (
     Arm,
     BareAgent,
+    Camera,
     Drive,
     Gains,
     Gripper,
@@ -62,8 +63,19 @@ BAD_FILES = [
     Bad("unknown_top_element.xml", 3, 3, "robt", None,
         ("unknown element inside <world>", "did you mean 'robot'?",
          "valid: plugin, named_pose, robot, object, human, agent")),
-    Bad("unknown_robot_child.xml", 4, 5, "camera", None,
-        ("unknown element inside <robot>", "valid: drive, lidar, gripper, arm, gains")),
+    Bad("unknown_robot_child.xml", 4, 5, "sonar", None,
+        ("unknown element inside <robot>", "valid: drive, lidar, camera, gripper, arm, gains")),
+    Bad("camera_unknown_link.xml", 4, 25, "camera", "link",
+        ("no link 'head_link' in ../models/tinybot.urdf",
+         "valid: base_link, wheel_l_link, wheel_r_link, laser_link, hand_link")),
+    Bad("duplicate_camera.xml", 5, 13, "camera", "name",
+        ("duplicate name 'eye'", "first on line 4", "each camera of a robot needs its own name")),
+    Bad("camera_near_far.xml", 4, 5, "camera", None, ("near 5 must be less than far 2",)),
+    Bad("camera_principal_outside.xml", 4, 5, "camera", None,
+        ("principal point (70, 20) lies outside the 64x48 image", "valid: 0 <= cx <= 63, 0 <= cy <= 47")),
+    Bad("camera_bad_type.xml", 4, 41, "camera", "type", ("'stereo'", "rgb", "depth", "rgbd")),
+    Bad("camera_frame_is_a_link.xml", 4, 13, "camera", "name",
+        ("would add the frame 'laser_link', which is a link of ../models/tinybot.urdf",)),
     Bad("unknown_attribute.xml", 3, 49, "object", "colour",
         ("unknown attribute", "did you mean 'color'?",
          "valid: color, controller, description, friction, graspable, mass, mesh, name, pose, scale, shape, size, "
@@ -393,11 +405,11 @@ def test_agent_lookup_lists_names(full: World) -> None:
 
 
 _DOCUMENTED: dict[str, type[BaseModel]] = {
-    "world": World, "plugin": PluginConfig, "robot": Robot, "drive": Drive, "lidar": Lidar,
+    "world": World, "plugin": PluginConfig, "robot": Robot, "drive": Drive, "lidar": Lidar, "camera": Camera,
     "gripper": Gripper, "arm": Arm, "gains": Gains, "object": Object, "human": Human, "agent": BareAgent,
     "named_pose": NamedPose,
 }
-_NOT_ATTRIBUTES = {"kind", "lidars", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
+_NOT_ATTRIBUTES = {"kind", "lidars", "cameras", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
                    "config", "line", "column", "positions", "named_poses"}
 _BOUNDS = (annotated_types.Gt, annotated_types.Ge, annotated_types.Lt, annotated_types.Le)
 

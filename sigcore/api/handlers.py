@@ -226,3 +226,18 @@ def send_msg_to_srv(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
         raise ApiError(f"'{agent}' is not connected to service '{name}'; call {agent}_connect_to_service first")
     sim.services[name](agent, m.msg)
     return {"ok": True}
+
+
+# ------------------------------------------------------------------ cameras (SIGVerse's captureView, distanceSensor)
+def capture_view(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
+    from ..sim.camera import image_fields
+
+    frame = sim.cameras.grab(sim.cameras.find(agent, m.camera))
+    header = {"stamp": frame.stamp_ns, "frame_id": frame.frame}
+    return {"image": image_fields(header, frame.rgb, "rgb8") if frame.rgb is not None else {},
+            "depth": image_fields(header, frame.depth, "32FC1") if frame.depth is not None else {},
+            "camera_info": {"header": header, **frame.info}}
+
+
+def distance_sensor(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
+    return {"distance": sim.cameras.distance(sim.cameras.find(agent, m.camera))}

@@ -83,8 +83,8 @@ def _entries() -> list[ApiEntry]:
         return ApiEntry(suffix, "subscribe", ros_type, msg, None, kinds, handler, doc, origin)
 
     def srv(suffix: str, ros_type: str, req: type[BaseModel], res: type[BaseModel], kinds: frozenset[str],
-            handler: Handler, doc: str) -> ApiEntry:
-        return ApiEntry(suffix, "service", ros_type, req, res, kinds, handler, doc)
+            handler: Handler, doc: str, origin: str = "sig_ros") -> ApiEntry:
+        return ApiEntry(suffix, "service", ros_type, req, res, kinds, handler, doc, origin)
 
     vec = t.EntityVector
     return [
@@ -174,6 +174,12 @@ def _entries() -> list[ApiEntry]:
             _SEND_TO_SERVICE),
         srv("_send_msg_to_service", "SendMsgToSrv", t.SendToServiceRequest, t.OkResponse, ALL, h.send_msg_to_srv,
             _SEND_TO_SERVICE),
+        srv("_captureView", "CaptureView", t.CameraRequest, t.CaptureViewResponse, ROBOT, h.capture_view,
+            "one image of a camera now (SIGVerse's captureView): rgb8, depth 32FC1 [m] and CameraInfo",
+            origin="sigcore"),
+        srv("_distanceSensor", "DistanceSensor", t.CameraRequest, t.DistanceResponse, ROBOT, h.distance_sensor,
+            "distance [m] along a camera's optical axis to the nearest surface (SIGVerse's distanceSensor)",
+            origin="sigcore"),
     ]
 
 

@@ -8,11 +8,38 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, create_model
+from pydantic import BaseModel, ConfigDict, GetCoreSchemaHandler, create_model
+from pydantic_core import core_schema
+
+
+class StandardMessage(dict[str, Any]):
+    """A field holding a standard ROS message (its field dictionary, as :mod:`sigcore.publish` spells values);
+    subclasses name the type in ``ros_type``. Empty: the message's defaults."""
+
+    ros_type = ""
+
+    @classmethod
+    def __get_pydantic_core_schema__(cls, source: Any, handler: GetCoreSchemaHandler) -> core_schema.CoreSchema:
+        return core_schema.no_info_after_validator_function(cls, core_schema.dict_schema())
+
+
+class ImageFields(StandardMessage):
+    """``sensor_msgs/Image`` fields."""
+
+    ros_type = "sensor_msgs/Image"
+
+
+class CameraInfoFields(StandardMessage):
+    """``sensor_msgs/CameraInfo`` fields."""
+
+    ros_type = "sensor_msgs/CameraInfo"
+
 
 FIELD_TYPES: dict[Any, str] = {str: "string", float: "float64", bool: "bool", int: "int32",
-                               list[str]: "string[]", list[float]: "float64[]"}
-_DEFAULTS: dict[Any, Any] = {str: "", float: 0.0, bool: False, int: 0}
+                               list[str]: "string[]", list[float]: "float64[]",
+                               ImageFields: ImageFields.ros_type, CameraInfoFields: CameraInfoFields.ros_type}
+_DEFAULTS: dict[Any, Any] = {str: "", float: 0.0, bool: False, int: 0, ImageFields: ImageFields(),
+                             CameraInfoFields: CameraInfoFields()}
 
 
 class ApiModel(BaseModel):
@@ -91,6 +118,13 @@ AnswerResponse = _model("AnswerResponse", "A yes/no answer.", answer=bool, **RES
 ServiceNameRequest = _model("ServiceNameRequest", "A service (e.g. a referee) by name.", service_name=str)
 ConnectedResponse = _model("ConnectedResponse", "Whether this agent is connected to the service.", connected=bool,
                             **RESULT)
+CameraRequest = _model("CameraRequest", "A camera of this robot by name (empty: its first <camera>).", camera=str)
+CaptureViewResponse = _model("CaptureViewResponse", "One image of the camera now, stamped with the current step, "
+                             "in its optical frame: `image` rgb8 (empty for a depth-only camera), `depth` 32FC1 in "
+                             "[m] (empty for an rgb-only camera), and the intrinsics.", image=ImageFields,
+                             depth=ImageFields, camera_info=CameraInfoFields, **RESULT)
+DistanceResponse = _model("DistanceResponse", "Distance [m] from the camera to the nearest surface along its "
+                          "optical axis (inf: nothing within its far distance).", distance=float, **RESULT)
 SendToServiceRequest = _model("SendToServiceRequest", "Send `msg` to service `name`.", name=str, msg=str)
 
 

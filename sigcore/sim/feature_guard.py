@@ -13,7 +13,8 @@ from ..isolation import describe
 log = logging.getLogger("sigcore")
 T = TypeVar("T")
 
-OBSERVER_LISTS = ("_step_observers", "collision_observers", "message_observers", "scan_observers")
+OBSERVER_LISTS = ("_step_observers", "collision_observers", "message_observers", "scan_observers",
+                  "camera_observers")
 """The simulation's observer lists (attribute names) that features attach to."""
 
 

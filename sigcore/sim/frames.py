@@ -12,7 +12,9 @@ frames are prefixed with ``<robot>/``. Objects and humans are frames named after
 * every movable joint: ``parent -> child`` from the joint ``<origin>``, ``<axis>`` and the joint's position, as
   robot_state_publisher computes it (:meth:`Frames.transforms`); floating and planar joints from the backend's
   link poses;
-* every object and human: ``world -> <entity>`` from the backend's pose (:meth:`Frames.entity_transforms`).
+* every object and human: ``world -> <entity>`` from the backend's pose (:meth:`Frames.entity_transforms`);
+* every camera: ``<link> -> <camera>_link`` at the camera's pose and ``<camera>_link -> <camera>_optical_frame``
+  (z forward, x right, y down), both static.
 
 A feature may re-parent a robot's ``odom`` (SLAM: ``world -> map`` static, ``map -> odom`` on ``/tf``): each child
 frame has exactly one parent here, so the tree keeps one root. The static part is published by the core on
@@ -42,6 +44,10 @@ WORLD = "world"
 TF_STATIC = Publication("/tf_static", "tf2_msgs/msg/TFMessage", "latched",
                         "the fixed part of the TF tree: world -> odom per robot with a <drive>, world -> root link "
                         "per fixed robot, every fixed joint")
+
+OPTICAL = (0.5, -0.5, 0.5, -0.5)
+"""Rotation (w, x, y, z) from a camera's body frame (x forward, z up) to its optical frame (z forward, x right, y
+down; REP-103): roll -π/2, then yaw -π/2."""
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]
@@ -118,6 +124,11 @@ class Frames:
                 self.set_static(WORLD, self.name(robot, "odom"), (pos[0], pos[1], 0.0),
                                 planar_quaternion(quat_yaw(quat)))
         self._moving[robot] = self._robot_tree(robot)
+        for camera in model.cameras:
+            self.set_static(self.name(robot, camera.link), self.name(robot, camera.link_frame), camera.pose.xyz,
+                            quat_from_rpy(*camera.pose.rpy))
+            self.set_static(self.name(robot, camera.link_frame), self.name(robot, camera.optical_frame),
+                            (0.0, 0.0, 0.0), OPTICAL)
 
     # ------------------------------------------------------------------ run-time changes
     def taken(self) -> dict[str, str]:
@@ -128,6 +139,9 @@ class Frames:
                 taken.setdefault(self.name(robot, link), f"the frame of link '{link}' of robot '{robot}'")
             taken.setdefault(self.name(robot, "odom"), f"the odometry frame of robot '{robot}'")
             taken.setdefault(self.name(robot, "map"), f"the map frame of robot '{robot}' (SLAM)")
+            for camera in self._sim.robot_model(robot).cameras:
+                for frame in (camera.link_frame, camera.optical_frame):
+                    taken.setdefault(self.name(robot, frame), f"a frame of camera '{camera.name}' of robot '{robot}'")
         for entity in self._entities:
             taken.setdefault(entity, f"the frame of entity '{entity}'")
         return taken
@@ -158,7 +172,9 @@ class Frames:
         gone = set(names)
         for robot in [r for r in self._prefix if r in gone]:
             mine = {self.name(robot, link) for link in self._sim.urdf(robot).links} | {
-                self.name(robot, "odom"), self.name(robot, "map")}
+                self.name(robot, "odom"), self.name(robot, "map")} | {
+                self.name(robot, frame) for camera in self._sim.robot_model(robot).cameras
+                for frame in (camera.link_frame, camera.optical_frame)}
             for child in [c for c in self._static if c in mine]:
                 self._static.pop(child)
             del self._prefix[robot]

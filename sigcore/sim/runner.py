@@ -190,6 +190,7 @@ def _loop(sim: Simulation, target: int | None, start_step: int, control: RunCont
             if control.pending_steps <= 0:
                 if transport is None:
                     break  # nothing can ever resume us
+                sim.cameras.settle()  # idle: the images of the last steps are published now, not at the next step
                 pace_time, pace_wall = sim.time, _time.perf_counter()  # no catching up after a pause
                 continue
             control.pending_steps -= 1

@@ -30,6 +30,7 @@ from ..text import quote
 from ..world.exceptions import WorldError, WorldIssue
 from ..world.models import Entity, Object, Robot, World
 from ..world.urdf import UrdfModel
+from .camera import CameraFrame, Cameras
 from .contacts import ContactTracker, rolling_parts
 from .control import RunControl
 from .description import DescriptionTopics
@@ -90,6 +91,8 @@ class Simulation:
         self.collision_observers: list[Callable[[CollisionEvent], None]] = []
         self.message_observers: list[Callable[[Message], None]] = []
         self.scan_observers: list[Callable[[Scan], None]] = []
+        self.camera_observers: list[Callable[[CameraFrame], None]] = []
+        """Called on the simulation thread with every camera image when it is published (``sim.cameras``)."""
         self._step_observers: list[StepObserver] = []
         self.entity_observers: list[Callable[[EntityChange], None]] = []
         """Called after every spawn and delete, once the core's state is consistent (transports, viewers)."""
@@ -153,6 +156,11 @@ class Simulation:
         self._source_slots: dict[tuple[str, str], tuple[Source, dict[str, Publisher], str | None]] = {}
         self._agent_topics: dict[str, list[str]] = {}  # agent -> the topics declared for it (withdrawn on delete)
         self.frames = Frames(self)
+        self.cameras = Cameras(self)
+        """Every ``<camera>`` of the robots, rendered off the simulation thread (``sigcore.sim.camera``)."""
+        for robot in world.agents:
+            if isinstance(robot, Robot) and robot.cameras:
+                self.cameras.add(robot.name, robot.cameras)
         self.scene = Scene(world, self.backend, self.frames.name)
         """Every entity's visual geometry and bounds (``sigcore.scene``); ``robot_description`` and
         ``/sigcore/scene`` are published from it."""
@@ -407,6 +415,9 @@ class Simulation:
         self._modes.add(models)
         self._refresh_contacts()
         self.frames.add([(m.name, m.kind) for m in models])
+        for model in models:
+            if isinstance(model, Robot) and model.cameras:
+                self.cameras.add(model.name, model.cameras, self.spawned[model.name])
         self.scene.add(world, models, self.frames.name)
         for model in models:
             if isinstance(model, Robot):
@@ -448,6 +459,7 @@ class Simulation:
             self.backend.remove_entities(world, names)
         except BackendError as e:
             raise SpawnRefusal("OPERATION_FAILED", f"the backend could not remove {', '.join(names)}: {e}") from None
+        self.cameras.remove(names)
         self.frames.remove(names)
         self.scene.remove(names)
         for name in names:
@@ -605,6 +617,7 @@ class Simulation:
                     observers = guard.detach(feature, observers, self.features)
             setattr(self, attr, [o for o in observers if id(o) not in self._source_observers])
         self._source_observers.clear()
+        self.cameras.close()
         self.backend.close()
 
     def _set_no_world(self) -> None:
@@ -818,6 +831,7 @@ class Simulation:
         if not self._started:
             return
         self._started = False
+        self.cameras.settle()
         plugins.notify("sigcore_simulation_stopped", simulation=self)
 
     def step(self, n: int = 1) -> None:
@@ -832,6 +846,7 @@ class Simulation:
             self.start()
         backend = self.backend
         dispatch = self.dispatch
+        cameras = self.cameras
         for _ in range(n):
             if self._outbox:
                 self.deliver_messages()
@@ -854,6 +869,8 @@ class Simulation:
                         except USER_ERRORS as e:
                             if not self._contain(scan_observer, e, "scan observer"):
                                 raise
+            if cameras.every and (self.step_count % cameras.every == 0 or cameras.in_flight):
+                cameras.capture(self.step_count)
             for odo in self.odometry.values():
                 odo.update(backend, self.step_count * self.dt)
             for observer in self._step_observers:  # a try costs nothing until something raises (Python >= 3.11)
@@ -872,6 +889,7 @@ class Simulation:
                 were deleted (at their world-file pose, with new controllers), as simulation_interfaces' full
                 reset does; False: only restore states (spawned entities go back to their state as spawned).
         """
+        self.cameras.settle()
         if despawn:
             if self.spawned:
                 self.delete(list(self.spawned))

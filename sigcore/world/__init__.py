@@ -4,6 +4,7 @@ from .exceptions import WorldError, WorldIssue
 from .models import (
     Arm,
     BareAgent,
+    Camera,
     Drive,
     Entity,
     Gains,
@@ -21,7 +22,7 @@ from .parser import parse_world
 from .urdf import UrdfDocument, UrdfError, UrdfFiles, UrdfJoint, UrdfModel, read_urdf
 
 __all__ = [
-    "Arm", "BareAgent", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "NamedPose", "Object", "PluginConfig",
-    "Pose", "Robot", "UrdfDocument", "UrdfError", "UrdfFiles", "UrdfJoint", "UrdfModel", "World", "WorldError",
-    "WorldIssue", "parse_world", "read_urdf",
+    "Arm", "BareAgent", "Camera", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "NamedPose", "Object",
+    "PluginConfig", "Pose", "Robot", "UrdfDocument", "UrdfError", "UrdfFiles", "UrdfJoint", "UrdfModel", "World",
+    "WorldError", "WorldIssue", "parse_world", "read_urdf",
 ]

@@ -217,6 +217,62 @@ class Lidar(_Model):
         return v
 
 
+CameraKind = Literal["rgb", "depth", "rgbd"]
+
+
+class Camera(_Model):
+    """``<camera>``: a pinhole camera on one link (square pixels). Its body frame follows REP-103 (x forward, y left,
+    z up) at ``pose`` in the link's frame; images are published in its optical frame (z forward, x right, y down)."""
+
+    name: Name = Field(description="camera name, unique within the robot; names its topics and frames")
+    link: str = Field(description="URDF link the camera sits on")
+    pose: PoseField = Field(default=Pose(), description="'x y z' [m] or 'x y z roll pitch yaw' [m, rad] in the "
+                                                        "link's frame; the camera looks along its x")
+    width: int = Field(default=320, ge=8, le=4096, description="image width in [px]")
+    height: int = Field(default=240, ge=8, le=4096, description="image height in [px]")
+    fov: float = Field(default=math.pi / 3, gt=0.01, lt=3.14,
+                       description="horizontal field of view in [rad] (ignored when 'focal' is given)")
+    focal: float | None = Field(default=None, gt=0, le=1e5, description="focal length in [px] (fx = fy)")
+    principal: Annotated[tuple[float, float], _numbers(2)] | None = Field(
+        default=None, description="'cx cy' principal point in [px]; default: the image centre, "
+                                  "((width - 1) / 2, (height - 1) / 2)")
+    near: float = Field(default=0.05, gt=0, le=100, description="nearest distance rendered in [m]")
+    far: float = Field(default=10.0, gt=0, le=10000, description="farthest distance rendered in [m]; depth beyond "
+                                                                 "it (or no hit) is +inf")
+    rate: float = Field(default=15.0, gt=0, le=1000, description="images per simulated second in [Hz]")
+    type: CameraKind = Field(default="rgbd", description="what it renders: rgb, depth or rgbd (both)")
+    noise: float = Field(default=0.0, ge=0, le=1, description="Gaussian depth noise std-dev in [m]")
+
+    @model_validator(mode="after")
+    def _check(self) -> Camera:
+        if self.near >= self.far:
+            raise ValueError(f"near {self.near:g} must be less than far {self.far:g}; valid: e.g. near='0.05' "
+                             "far='10'")
+        if self.principal is not None:
+            cx, cy = self.principal
+            if not (0 <= cx <= self.width - 1 and 0 <= cy <= self.height - 1):
+                raise ValueError(f"principal point ({cx:g}, {cy:g}) lies outside the {self.width}x{self.height} "
+                                 f"image; valid: 0 <= cx <= {self.width - 1}, 0 <= cy <= {self.height - 1}")
+        return self
+
+    @property
+    def intrinsics(self) -> tuple[float, float, float]:
+        """``(f, cx, cy)`` [px]: the focal length and the principal point (pixel centres at integers)."""
+        f = self.focal if self.focal is not None else (self.width / 2) / math.tan(self.fov / 2)
+        cx, cy = self.principal if self.principal is not None else ((self.width - 1) / 2, (self.height - 1) / 2)
+        return f, cx, cy
+
+    @property
+    def link_frame(self) -> str:
+        """The camera's body frame (x forward), a child of :attr:`link` (unprefixed)."""
+        return f"{self.name}_link"
+
+    @property
+    def optical_frame(self) -> str:
+        """The camera's optical frame (z forward, x right), a child of :attr:`link_frame` (unprefixed)."""
+        return f"{self.name}_optical_frame"
+
+
 class Gripper(_Model):
     """``<gripper>``: a part that can grasp graspable objects within ``grasp_radius``."""
 
@@ -254,6 +310,7 @@ class Robot(_Model):
     fixed: bool = Field(default=False, description="root link welded to the world")
     drive: Drive | None = None
     lidars: tuple[Lidar, ...] = ()
+    cameras: tuple[Camera, ...] = ()
     grippers: tuple[Gripper, ...] = ()
     arms: tuple[Arm, ...] = ()
     gains: Gains = Gains()

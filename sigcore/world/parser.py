@@ -17,6 +17,7 @@ from .messages import error_field, message, unknown
 from .models import (
     Arm,
     BareAgent,
+    Camera,
     Drive,
     Gains,
     Gripper,
@@ -36,11 +37,12 @@ _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
     # tag: (model, field of Robot, many)
     "drive": (Drive, "drive", False),
     "lidar": (Lidar, "lidars", True),
+    "camera": (Camera, "cameras", True),
     "gripper": (Gripper, "grippers", True),
     "arm": (Arm, "arms", True),
     "gains": (Gains, "gains", False),
 }
-_INTERNAL_FIELDS = {"kind", "lidars", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
+_INTERNAL_FIELDS = {"kind", "lidars", "cameras", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
                     "config", "line", "column", "positions", "named_poses"}
 _LIBXML_POSITION = re.compile(r", line \d+, column \d+$")
 
@@ -213,7 +215,7 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
     tag = str(element.tag)
     model = _AGENTS[tag]
     extra: dict[str, Any] = {}
-    children: dict[str, list[Any]] = {"drive": [], "lidars": [], "grippers": [], "arms": [], "gains": []}
+    children: dict[str, list[Any]] = {"drive": [], "lidars": [], "cameras": [], "grippers": [], "arms": [], "gains": []}
     if tag == "robot":
         first: dict[str, etree._Element] = {}
         for child in reader.children_of(element, _ROBOT_CHILDREN):
@@ -229,7 +231,7 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
                 children[field].append((child, value))
         for field, items in children.items():
             values = tuple(v for _, v in items)
-            if field in ("lidars", "grippers", "arms"):
+            if field in ("lidars", "cameras", "grippers", "arms"):
                 extra[field] = values
             elif values:
                 extra[field] = values[0]
@@ -239,6 +241,7 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
     if tag in ("robot", "object"):
         _check_files(reader, element, base, children)
     _unique(reader, children["lidars"], "name", "each lidar of a robot needs its own name")
+    _unique(reader, children["cameras"], "name", "each camera of a robot needs its own name")
     _unique(reader, children["grippers"], "part", "one gripper per part")
     _unique(reader, children["arms"], "name", "each arm of a robot needs its own name")
     if agent is not None:
@@ -247,7 +250,7 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
             reader.locations[(agent.name, str(key))] = reader.map.attribute(element, str(key))
         for child, _ in children["drive"]:
             reader.locations[(agent.name, "drive")] = reader.map.element(child)
-        for field, tag in (("lidars", "lidar"), ("arms", "arm")):
+        for field, tag in (("lidars", "lidar"), ("cameras", "camera"), ("arms", "arm")):
             for child, value in children[field]:
                 reader.locations[(agent.name, f"{tag}:{value.name}")] = reader.map.attribute(child, "name")
     return agent
@@ -340,12 +343,18 @@ def _check_robot(reader: _Reader, urdf: UrdfModel, file: str, children: dict[str
         if unknown_casters:
             reader.issue(child, "casters", f"no link {', '.join(repr(c) for c in unknown_casters)} in {file}; "
                                            f"valid: space-separated links among {', '.join(urdf.links)}")
-    checks = (("lidars", "link"), ("grippers", "part"), ("arms", "base"), ("arms", "tip"))
+    checks = (("lidars", "link"), ("cameras", "link"), ("grippers", "part"), ("arms", "base"), ("arms", "tip"))
     for field, attr in checks:
         for child, value in children[field]:
             link = getattr(value, attr)
             if link not in urdf.links:
                 reader.issue(child, attr, f"no link '{link}' in {file}; valid: {', '.join(urdf.links)}")
+    for child, camera in children["cameras"]:
+        for frame in (camera.link_frame, camera.optical_frame):
+            if frame in urdf.links:
+                reader.issue(child, "name", f"camera '{camera.name}' would add the frame '{frame}', which is a link "
+                                            f"of {file}; valid: a name whose frames '<name>_link' and "
+                                            "'<name>_optical_frame' are not links")
 
 
 def _automatic_poses(reader: _Reader, poses: list[Any], agents: list[Any]) -> None:

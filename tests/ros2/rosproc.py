@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -105,6 +106,19 @@ def start_sim(tmp: Path, world: Path = WORLD, *args: str) -> SimProcess:
         sim.stop()
         raise
     return sim
+
+
+def client_against(tmp: Path, world: Path, script: str, *args: str, sim_args: tuple[str, ...] = (),
+                   timeout: float = 180.0) -> Iterator[dict]:
+    """Start a simulation of ``world`` (``sim_args`` on its command line), run the client ``script`` against it,
+    yield what the client emitted (the simulation still running), and stop the simulation at the end."""
+    sim = start_sim(tmp, world, *sim_args)
+    try:
+        result = sim.client(script, *args, timeout=timeout)
+        assert sim.alive(), sim.output()
+        yield result
+    finally:
+        sim.stop()
 
 
 def wait_until(predicate: object, timeout: float = 10.0) -> bool:

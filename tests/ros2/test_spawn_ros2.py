@@ -13,7 +13,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
-from rosproc import WORLD, start_sim  # noqa: E402
+from rosproc import WORLD, client_against  # noqa: E402
 
 SIGBOT = Path(__file__).resolve().parents[2] / "worlds" / "models" / "sigbot" / "sigbot.urdf"
 OK, NOT_FOUND, OPERATION_FAILED = 1, 2, 4
@@ -29,13 +29,8 @@ REST = 0.02
 @pytest.fixture(scope="module", params=["mujoco", "bullet"])
 def out(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict]:
     """What clients/spawn.py saw, per backend."""
-    sim = start_sim(tmp_path_factory.mktemp(f"spawn_{request.param}"), WORLD, "--backend", request.param)
-    try:
-        result = sim.client("spawn.py", str(SIGBOT), timeout=240)
-        assert sim.alive(), sim.output()
-        yield result
-    finally:
-        sim.stop()
+    yield from client_against(tmp_path_factory.mktemp(f"spawn_{request.param}"), WORLD, "spawn.py", str(SIGBOT),
+                              sim_args=("--backend", request.param), timeout=240)
 
 
 def test_spawning_is_announced(out: dict) -> None:
@@ -52,13 +47,16 @@ def test_spawning_is_announced(out: dict) -> None:
 
 def test_spawned_while_playing_fall_and_rest_on_the_floor(out: dict) -> None:
     """A URDF robot, a box and a spawnable robot spawned in the air while PLAYING keep their names, fall, and rest
-    on the floor after 3 s of lockstep steps: the robots' frames at z = 0, the 0.1 m box's centre at 0.05 m."""
+    on the floor after 3 s of lockstep steps: the robots' frames at z = 0, the 0.1 m box's centre at 0.05 m (it was
+    dropped from 0.8 m)."""
     assert out["state_at_spawn"] == PLAYING
     assert out["rover"] == {"result": OK, "message": "", "name": "rover"}
     assert out["many"]["result"] == OK
     assert out["many"]["results"] == [{"result": OK, "name": "crate"}, {"result": OK, "name": "rover2"}]
     assert out["paused"] == OK and out["step"] == OK
-    assert out["z0"]["crate"] > 0.1  # dropped from 0.8 m: paused less than 0.38 s after it was spawned
+    # How far the crate fell before the pause depends on wall time (a loaded machine may pause after it landed), so
+    # only its bounds are asserted: between where it was dropped (0.8 m) and resting on the floor (0.05 m).
+    assert 0.05 - REST < out["z0"]["crate"] <= 0.8 + 1e-6
     assert abs(out["z"]["crate"] - 0.05) < REST
     assert abs(out["z"]["rover"]) < REST and abs(out["z"]["rover2"]) < REST
 

@@ -125,6 +125,18 @@ def test_a_camera_image_is_shown(started: tuple[Simulation, WebViewer, Taken]) -
     assert "/robot_000/head/image" not in fresh(viewer, pushed).images  # an encoding it cannot show: nothing
 
 
+def test_the_head_camera_of_the_clean_up_robot_is_shown(started: tuple[Simulation, WebViewer, Taken]) -> None:
+    """robot_000's RGB-D head camera (15 Hz): after 100 steps its colour and depth images reach the viewer (the
+    viewer takes images, so the camera renders with no other subscriber), at the camera's size."""
+    sim, viewer, pushed = started
+    sim.step(100)
+    sim.cameras.settle()
+    images = fresh(viewer, pushed).images
+    assert images["/robot_000/head_rgbd/image_raw"].shape == (240, 320, 3)
+    assert images["/robot_000/head_rgbd/depth/image_raw"].shape == (240, 320, 3)  # depth shown in grey levels
+    assert images["/robot_000/head_rgbd/image_raw"].std() > 5  # the room, not a blank picture
+
+
 def test_robot_links_are_nested_under_the_robot_and_compose_to_their_pose(
         started: tuple[Simulation, WebViewer, Taken]) -> None:
     """A robot's link nodes hang under its root link's node, posed relative to it (one node moves when it drives);

@@ -41,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 import pybullet as pb
 
-from sigcore.backend import GROUND, MAIN, Array, Backend, BackendError, BackendRefusal
+from sigcore.backend import GROUND, MAIN, Array, Backend, BackendError, BackendRefusal, Renderer
 from sigcore.geometry import cross
 from sigcore.world.models import Human, Object, Robot, World
 
@@ -331,6 +331,14 @@ class BulletBackend(Backend):
         self._world = world
         self._index()
         self._entities_changed = True
+
+    # ------------------------------------------------------------------ cameras
+    def renderer(self) -> Renderer:
+        """A renderer of this world through PyBullet's TinyRenderer, on the simulation's thread (:mod:`.render`)."""
+        from .render import BulletRenderer
+
+        self._client()
+        return BulletRenderer(self)
 
     # ------------------------------------------------------------------ introspection
     def parts(self, entity: str) -> list[str]:

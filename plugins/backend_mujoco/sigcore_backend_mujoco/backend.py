@@ -35,7 +35,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from sigcore.backend import Array, Backend, BackendError, BackendRefusal
+from sigcore.backend import Array, Backend, BackendError, BackendRefusal, Renderer
 from sigcore.geometry import normalized as unit
 from sigcore.geometry import quat_to_matrix
 from sigcore.world.models import World
@@ -230,6 +230,14 @@ class MujocoBackend(Backend):
         self._tick += 1
         self._synced = -1
         self._contacts_tick = self._tick
+
+    # ------------------------------------------------------------------ cameras
+    def renderer(self) -> Renderer:
+        """A threaded renderer of this world through MuJoCo's OpenGL renderer (:mod:`.render`)."""
+        from .render import MujocoRenderer
+
+        self._require_world()
+        return MujocoRenderer(self)
 
     # ------------------------------------------------------------------ introspection
     def parts(self, entity: str) -> list[str]:

@@ -146,6 +146,11 @@ class PublicationEndpoints(PublicationSink):
         if entry is not None:
             self.node.destroy_publisher(entry[0])
 
+    def wants(self, publication: Publication) -> bool:
+        """Whether the topic's publisher has subscribers now."""
+        entry = self.publishers.get(publication.topic)
+        return entry is not None and entry[0].get_subscription_count() > 0
+
     def publish(self, publication: Publication, stamp_ns: int, value: dict[str, Any]) -> None:
         """Fill a message of the declared type and publish it."""
         entry = self.publishers.get(publication.topic)

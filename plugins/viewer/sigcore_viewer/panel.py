@@ -68,7 +68,9 @@ class Panel:
         self.pause.on_click(lambda _e: post(("pause",)))
         self.step.on_click(lambda _e: post(("step", self.steps.value)))
         self.reset.on_click(lambda _e: post(("reset",)))
-        self.pace.on_update(lambda _e: post(("pace", self.pace.value)))
+        # a person's choice only: showing the run's pace (update) assigns the value too, which calls this with no
+        # client, and echoing that could undo a newer change made meanwhile (by the command line, another browser)
+        self.pace.on_update(lambda e: post(("pace", self.pace.value)) if e.client_id is not None else None)
         self.send.on_click(lambda _e: post(("send", "" if self.to.value == NONE else self.to.value,
                                             self.message.value)))
         self.entity.on_update(lambda _e: self._entity_picked())
