@@ -272,6 +272,14 @@ class CameraView:
     rgb: bool = True
     depth: bool = True
 
+    def frustum(self) -> tuple[float, float, float, float]:
+        """``(left, right, bottom, top)`` of the view at the near plane [m], as OpenGL's ``glFrustum`` takes them,
+        in the camera's OpenGL frame (y up): the image plane spans pixel edges -0.5 .. width - 0.5 (pixel centres at
+        integers, as CameraInfo's K has them)."""
+        n, f = self.near, self.focal
+        return ((-0.5 - self.cx) / f * n, (self.width - 0.5 - self.cx) / f * n,
+                -(self.height - 0.5 - self.cy) / f * n, (self.cy + 0.5) / f * n)
+
 
 Image = npt.NDArray[np.generic]
 

@@ -118,13 +118,6 @@ class CameraSensor:
         return CameraView(pos, quat_to_matrix(quat), m.width, m.height, self.focal, self.cx, self.cy, m.near,
                           m.far, rgb=m.type != "depth", depth=m.type != "rgb")
 
-    def project(self, points: Array, position: Array, quaternion: Array) -> Array:
-        """Pixel coordinates ``(u, v)`` of world ``points`` (N, 3) seen from an optical frame at ``position``,
-        ``quaternion``, through this camera's intrinsics (what CameraInfo's P says)."""
-        local = (np.atleast_2d(points) - position) @ quat_to_matrix(quaternion)
-        return np.stack([self.focal * local[:, 0] / local[:, 2] + self.cx,
-                         self.focal * local[:, 1] / local[:, 2] + self.cy], axis=1)
-
 
 @dataclass
 class _Job:
@@ -147,11 +140,8 @@ class Cameras:
     def __init__(self, sim: Simulation) -> None:
         self._sim = sim
         self.sensors: list[CameraSensor] = []
-        self.last: dict[tuple[str, str], CameraFrame] = {}
-        """The latest frame of each ``(robot, camera)``."""
         self._publishers: dict[tuple[str, str], list[tuple[str, Publisher]]] = {}
-        self._watchers: dict[int, Callable[[CameraFrame], None]] = {}  # id(sensor) -> who takes its frames
-        self._watched: list[CameraSensor] = []
+        self._watched: dict[int, tuple[CameraSensor, Callable[[CameraFrame], None]]] = {}  # id(view) -> (view, taker)
         self._renderer: Renderer | None = None
         self._failed: str | None = None
         self._jobs: queue.Queue[Any] = queue.Queue(maxsize=1)
@@ -166,7 +156,8 @@ class Cameras:
 
     def _changed(self) -> None:
         """Recompute :attr:`every` after cameras or watched views came or went."""
-        self.every = math.gcd(*(s.period_steps for s in (*self.sensors, *self._watched)))
+        views = (*self.sensors, *(sensor for sensor, _ in self._watched.values()))
+        self.every = math.gcd(*(s.period_steps for s in views))
 
     # ------------------------------------------------------------------ cameras come and go
     def add(self, robot: str, cameras: Sequence[Camera], namespace: str = "") -> None:
@@ -187,7 +178,6 @@ class Cameras:
         for key in [k for k in self._publishers if k[0] in gone]:
             for topic, _ in self._publishers.pop(key):
                 self._sim.publications.withdraw(topic)
-            self.last.pop(key, None)
         self.sensors = [s for s in self.sensors if s.robot not in gone]
         self._changed()
 
@@ -210,15 +200,13 @@ class Cameras:
     def watch(self, sensor: CameraSensor, on_frame: Callable[[CameraFrame], None]) -> None:
         """Render ``sensor`` at its rate for ``on_frame`` alone (called on the simulation thread, in step order), not
         published and whether or not anything receives publications (a video, :mod:`sigcore.sim.video`)."""
-        self._watchers[id(sensor)] = on_frame
-        self._watched.append(sensor)
+        self._watched[id(sensor)] = (sensor, on_frame)
         self._changed()
 
     def unwatch(self, sensor: CameraSensor) -> None:
         """Stop rendering ``sensor`` for its watcher (frames in flight are delivered first)."""
         self.settle()
-        self._watchers.pop(id(sensor), None)
-        self._watched = [s for s in self._watched if s is not sensor]
+        self._watched.pop(id(sensor), None)
         self._changed()
 
     # ------------------------------------------------------------------ on request (the API's services)
@@ -281,7 +269,7 @@ class Cameras:
         the frames that finished rendering. A camera is rendered only while something takes its images (a
         ``sim.camera_observers`` entry, or a sink that wants one of its topics: a ROS 2 subscriber)."""
         due = [s for s in self.sensors if step % s.period_steps == 0 and self._wanted(s)]
-        due += [s for s in self._watched if step % s.period_steps == 0]
+        due += [s for s, _ in self._watched.values() if step % s.period_steps == 0]
         if due and self._failed is None:
             self._submit(due, step)
         if self.in_flight:
@@ -402,8 +390,9 @@ class Cameras:
     # ------------------------------------------------------------------ publishing
     def _publish(self, job: _Job) -> None:
         for sensor, frame in zip(job.sensors, job.frames or (), strict=True):
-            watcher = self._watchers.get(id(sensor))
-            if watcher is not None:
+            watched = self._watched.get(id(sensor))
+            if watched is not None:
+                watcher = watched[1]
                 try:
                     watcher(frame)
                 except USER_ERRORS:
@@ -413,7 +402,6 @@ class Cameras:
             publishers = self._publishers.get(key)
             if publishers is None:  # its robot was deleted meanwhile
                 continue
-            self.last[key] = frame
             header = {"stamp": frame.stamp_ns, "frame_id": frame.frame}
             info = {"header": header, **frame.info}
             for topic, publisher in publishers:

@@ -29,11 +29,10 @@ LIGHT = {"lightDirection": [-3.0, -2.0, 10.0], "lightAmbientCoeff": 0.5, "lightD
 
 
 def projection(view: CameraView) -> list[float]:
-    """The OpenGL projection matrix (column-major) of ``view``'s intrinsics: the image plane spans pixel edges
-    -0.5 .. width - 0.5, pixel centres at integers."""
-    n, f, fl = view.near, view.far, view.focal
-    left, right = (-0.5 - view.cx) / fl * n, (view.width - 0.5 - view.cx) / fl * n
-    top, bottom = (view.cy + 0.5) / fl * n, -(view.height - 0.5 - view.cy) / fl * n
+    """The OpenGL projection matrix (column-major) of ``view``'s intrinsics (``glFrustum`` of
+    :meth:`~sigcore.backend.CameraView.frustum`)."""
+    n, f = view.near, view.far
+    left, right, bottom, top = view.frustum()
     return [2 * n / (right - left), 0.0, 0.0, 0.0,
             0.0, 2 * n / (top - bottom), 0.0, 0.0,
             (right + left) / (right - left), (top + bottom) / (top - bottom), -(f + n) / (f - n), -1.0,

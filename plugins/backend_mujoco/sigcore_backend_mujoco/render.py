@@ -97,12 +97,10 @@ class MujocoRenderer(Renderer):
         return out
 
     def _draw(self, scene: mujoco.MjvScene, view: CameraView) -> tuple[Image | None, Image | None]:
-        w, h, f = view.width, view.height, view.focal
+        w, h = view.width, view.height
         r = view.rotation  # columns: optical x (right), y (down), z (forward)
         near, far = view.near, view.far
-        # the image plane spans pixel edges -0.5 .. w-0.5; OpenGL's y is up: top = (cy + 0.5) / f at distance 1
-        left, right = (-0.5 - view.cx) / f * near, (w - 0.5 - view.cx) / f * near
-        top, bottom = (view.cy + 0.5) / f * near, -(h - 0.5 - view.cy) / f * near
+        left, right, bottom, top = view.frustum()
         for cam in (scene.camera[0], scene.camera[1]):
             cam.pos[:] = view.position
             cam.forward[:] = r[:, 2]
