@@ -20,6 +20,7 @@ from .isolation import CALLBACK_BUDGET, BudgetError, CallbackBudget
 from .world import WorldError, parse_world
 
 if TYPE_CHECKING:
+    from .record import Recorder
     from .sim import Simulation
     from .sim.startgate import StartGate
     from .sim.video import VideoRecorder
@@ -28,7 +29,8 @@ if TYPE_CHECKING:
     from .world import World
 
 app = typer.Typer(help="sigcore: drive a physics simulation through ROS 2 topics and services.",
-                  no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False)
+                  no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
+                  rich_markup_mode=None)  # help text is plain: units such as [s] stay as written
 # Markup off: what is printed comes from users (names, errors, features' lines) and is never interpreted.
 out = Console(highlight=False, soft_wrap=True, markup=False)
 err = Console(stderr=True, highlight=False, markup=False)
@@ -247,6 +249,21 @@ def _video(sim: Simulation, path: Path | None, camera: str, fps: float) -> Video
         raise _fail([str(e)]) from None
 
 
+def _record(sim: Simulation, path: Path | None, topics: list[str] | None, rate: float,
+            overwrite: bool) -> Recorder | None:
+    """The recorder of ``--record`` (its bag open, connected to the simulation), or None."""
+    if path is None:
+        if topics or overwrite:
+            raise _fail([f"{'--record-topics' if topics else '--overwrite'} is for --record DIR, which is not given"])
+        return None
+    from .record import Recorder, RecordError
+
+    try:
+        return Recorder(sim, path, topics, rate, overwrite)
+    except RecordError as e:
+        raise _fail([f"--record: {e}"]) from None
+
+
 def _viewer(enabled: bool, host: str, port: int | None, rate: float) -> Viewer | None:
     """The viewer to start beside the transport (``--viewer``), listening already (its URL known), or None."""
     from .viewer import DEFAULT_VIEWER, ViewerError
@@ -321,6 +338,17 @@ def run(
         "--video-camera", metavar="NAME", help="the video's view: 'overview' (the whole room) or a robot's camera "
         "(NAME or ROBOT/NAME)")] = "overview",
     video_fps: Annotated[float, typer.Option("--video-fps", help="video frames per simulated second [Hz]")] = 30.0,
+    record: Annotated[Path | None, typer.Option(
+        "--record", metavar="DIR", help="record the run into a rosbag2 directory (MCAP): every topic, the ground "
+        "truth, the world file (see docs/recording.md)")] = None,
+    record_topics: Annotated[list[str] | None, typer.Option(
+        "--record-topics", metavar="REGEX", help="with --record: only the topics a regular expression matches "
+        "(re.search on the full name); repeatable")] = None,
+    ground_truth_rate: Annotated[float, typer.Option(
+        "--ground-truth-rate", min=0, help="with --record: rate of /sigcore/ground_truth [Hz of simulated time]; "
+        "0: at the start and the end only")] = 30.0,
+    overwrite: Annotated[bool, typer.Option(
+        "--overwrite", help="with --record: replace the recording in DIR if it exists")] = False,
 ) -> None:
     """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
     stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed. Arguments after
@@ -351,6 +379,7 @@ def run(
     _check_endpoints(transport_obj, sim)
     gate = _gate(wait_for, wait_timeout, paused, transport_obj, sim)
     recorder = _video(sim, video, video_camera, video_fps)
+    bag = _record(sim, record, record_topics, ground_truth_rate, overwrite)
     viewer_obj = _viewer(viewer, viewer_host, viewer_port, viewer_rate)  # listening now: a taken port is exit 2
     total = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     show_progress = not quiet and total is not None
@@ -397,6 +426,8 @@ def run(
     finally:
         if recorder is not None:
             recorder.close()
+        if bag is not None:
+            bag.close()
     if tty and show_progress:
         err.print(" " * 70, end="\r")
     for kind in ("robot", "object", "human", "agent"):
@@ -426,6 +457,9 @@ def run(
     if recorder is not None:
         out.print(f"  video:    {recorder.path} ({recorder.frames} frames, {recorder.duration:.2f} s at "
                   f"{recorder.fps:.4g} fps)")
+    if bag is not None:
+        state = f"stopped early: {bag.bag.failure}" if bag.bag.failure else "complete"
+        out.print(f"  recording: {bag.path} ({bag.messages} messages; {state}); sigcore bag info {bag.path}")
     if report.error is not None:
         raise typer.Exit(3)  # the run could not go on (a transport or a bug), the report above says why
     if report.outcome is False:
@@ -434,7 +468,8 @@ def run(
 
 @app.command()
 def view(
-    world_file: WorldPath,
+    world_file: Annotated[Path, typer.Argument(
+        exists=True, help="world XML file, or a recording: a directory made by sigcore run --record (or its .mcap)")],
     backend: Annotated[str, typer.Option(help="physics backend", callback=_check_backend)] = "mujoco",
     transport: Annotated[str | None, typer.Option(
         help=f"transport plugin; default '{DEFAULT_TRANSPORT}' when installed; 'none': the viewer alone")] = None,
@@ -444,11 +479,48 @@ def view(
     viewer_rate: ViewerRate = 30.0,
 ) -> None:
     """Open a world in the web viewer, paused at t = 0: press play in the browser (= sigcore run WORLD --viewer
-    --paused). The transport (ROS 2 by default) runs beside it; Ctrl-C ends the run and prints the results."""
+    --paused). The transport (ROS 2 by default) runs beside it; Ctrl-C ends the run and prints the results.
+    Given a recording (sigcore run --record DIR), the viewer plays it back with a timeline to scrub."""
+    if world_file.is_dir() or world_file.suffix == ".mcap":
+        _view_recording(world_file, viewer_host, viewer_port, viewer_rate)
+        return
     run(world_file, backend=backend, duration=None, steps=None, fast=False, realtime=False, factor=None,
         paused=True, wait_for=None, wait_timeout=0.0, transport=transport, quiet=True, controller=controller,
         callback_budget=CALLBACK_BUDGET, disable_slow_controllers=False, worlds=None, viewer=True,
         viewer_host=viewer_host, viewer_port=viewer_port, viewer_rate=viewer_rate)
+
+
+def _view_recording(path: Path, host: str, port: int | None, rate: float) -> None:
+    """``sigcore view DIR``: check the recording, open the viewer, play it back until Ctrl-C."""
+    import signal
+
+    from .record import BagError, bag_info
+    from .viewer import ViewerError
+
+    try:
+        info = bag_info(path)
+    except BagError as e:
+        raise _fail([f"sigcore view: {e}"]) from None
+    for problem in info.problems:
+        err.print(f"sigcore view: warning: {problem}; showing what is readable")
+    viewer = _viewer(True, host, port, rate)
+    assert viewer is not None
+    stop = {"now": False}
+
+    def interrupted(*_: object) -> None:
+        stop["now"] = True
+
+    previous = {sig: signal.signal(sig, interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
+    err.print(f"ready: viewer at {viewer.url} shows {path} ({(info.end_ns - info.start_ns) / 1e9:.2f} s recorded); "
+              "Ctrl-C ends it", markup=False, soft_wrap=True)
+    try:
+        viewer.play_recording(path, lambda: stop["now"])
+    except ViewerError as e:
+        raise _fail([f"sigcore view: {e}"]) from None
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        viewer.stop()
 
 
 @app.command()
@@ -601,6 +673,123 @@ def worlds_cmd(
         err.print(problem, markup=False, soft_wrap=True)
     if problems:
         raise typer.Exit(2)
+
+
+REPLAY_TOLERANCE = {"mujoco": 0.0, "bullet": 1e-6}
+"""How far a replay's final poses may be from the recorded ones [m, and unit quaternion components]: MuJoCo is
+deterministic to the bit; PyBullet's tolerance is stated, not assumed."""
+
+
+@app.command()
+def replay(
+    path: Annotated[Path, typer.Argument(help="a recording made with sigcore run --record")],
+    until: Annotated[int | None, typer.Option(
+        "--until", min=0, help="stop at this step and hand the simulation, paused, to live clients (through "
+        "--transport)")] = None,
+    transport: Annotated[str, typer.Option(
+        help="with --until: the transport the clients take over through ('none': only check and stop)")] = "ros2",
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no progress display")] = False,
+) -> None:
+    """Re-simulate a recorded run from its world and its input log, with no client attached, and compare every
+    body's pose at the end with the recorded ground truth (bit for bit on MuJoCo). --until STEP stops there and
+    hands the paused simulation to live clients, so a failed episode can be inspected where it went wrong."""
+    from .record.replay import Replayer, ReplayError, compare, describe_inputs, load_recording, poses_now
+    from .sim import Simulation
+    from .sim import run as run_sim
+    from .sim.inputs import REPLAYED
+
+    try:
+        rec = load_recording(path)
+        world = rec.world()
+    except ReplayError as e:
+        raise _fail([f"sigcore replay: {e}"]) from None
+    final = rec.final_step
+    target = final if until is None else until
+    if target > final:
+        raise _fail([f"sigcore replay: --until {until}: the recording ends at step {final} "
+                     f"(t = {final * float(rec.facts['timestep']):.3f} s)"])
+    blocked = next((i for i in rec.inputs if i.kind not in REPLAYED and i.step < target), None)
+    if blocked is not None:
+        what = blocked.args.get("what", blocked.kind)
+        raise _fail([f"sigcore replay: step {blocked.step}: the run applied '{what}', which replay does not "
+                     f"reproduce yet (it replays: {', '.join(REPLAYED)}); --until {blocked.step} replays up to it"])
+    handover = _transport(transport) if until is not None else None
+    backend = rec.facts.get("backend", "mujoco")
+    try:
+        sim = Simulation(world, backend, rec.controllers)
+    except SigcoreError as e:
+        raise _fail([f"sigcore replay: cannot build the recorded world on '{backend}': {e}"]) from None
+    if sim.step_count != rec.start_step:
+        raise _fail([f"sigcore replay: the recording starts at step {rec.start_step}, a new simulation at "
+                     f"{sim.step_count}"])
+    kinds = ", ".join(f"{n} {k}" for k, n in describe_inputs(rec.inputs).items()) or "none"
+    out.print(f"sigcore {__version__}: replaying {path} (world '{sim.world.name}', backend '{backend}') to step "
+              f"{target} of {final}; recorded commands: {kinds}")
+    replayer = Replayer(rec.inputs, until=target)
+    api_log = logging.getLogger("sigcore.api")
+    level = api_log.level
+    api_log.setLevel(logging.ERROR)  # refusals were logged when the run was recorded: not again for each one
+    total = max(1, target - sim.step_count)
+
+    def progress(s: Simulation) -> None:
+        if not quiet:
+            err.print(f"  step {s.step_count} of {target} ({100 * s.step_count / total:5.1f} %), "
+                      f"{replayer.applied} commands applied", markup=False)
+
+    try:
+        report = run_sim(sim, steps=target - sim.step_count, transport=[replayer], realtime_factor=None,
+                         progress=progress, progress_every=5.0)
+    finally:
+        api_log.setLevel(level)
+    if report.error is not None:
+        raise _fail([f"sigcore replay: the replay stopped at step {sim.step_count}: {report.error}"], 3)
+    out.print(f"  replayed: {report.steps} steps, {replayer.applied} commands applied, wall {report.wall_time:.2f} s")
+    recorded = next((poses for step, poses in rec.truth if step == sim.step_count), None)
+    differs = False
+    if recorded is None:
+        out.print(f"  ground truth: none recorded at step {sim.step_count} (it is recorded at its rate and at the "
+                  "last step): not compared")
+    else:
+        equal, worst, where = compare(recorded, poses_now(sim))
+        tolerance = REPLAY_TOLERANCE.get(backend, 1e-6)
+        differs = not (equal or worst <= tolerance)
+        verdict = ("bitwise equal" if equal else f"largest difference {worst:.3g} at {where} "
+                   f"({'within' if not differs else 'beyond'} the tolerance {tolerance:g} of '{backend}')")
+        out.print(f"  ground truth at step {sim.step_count}: {len(recorded)} frames, {verdict}")
+    if until is not None and handover is not None:
+        sim.control.paused = True
+
+        def started(s: Simulation) -> None:
+            err.print(f"ready: replayed to step {s.step_count} (t = {s.time:.3f} s), paused; transport "
+                      f"'{handover.name}' is up: clients take over (play, step, inspect); Ctrl-C ends it",
+                      markup=False, soft_wrap=True)
+
+        run_sim(sim, transport=[handover], control=sim.control, realtime_factor=1.0, started=started)
+    if differs:
+        raise typer.Exit(1)
+
+
+bag_app = typer.Typer(help="Recordings (rosbag2 directories with MCAP storage): look inside, play back.",
+                      no_args_is_help=True, rich_markup_mode=None)
+app.add_typer(bag_app, name="bag")
+
+
+@bag_app.command(name="info")
+def bag_info_command(
+    path: Annotated[Path, typer.Argument(help="a recording: its directory (or one .mcap file)")],
+) -> None:
+    """Print what a recording holds, like ros2 bag info: topics, types, counts, times (simulated), attachments;
+    a recording cut short is read as far as it goes and its problems are listed (exit 1)."""
+    from .record import BagError, bag_info, format_info
+
+    try:
+        info = bag_info(path)
+    except BagError as e:
+        raise _fail([f"sigcore bag info: {e}"]) from None
+    for line in format_info(info):
+        out.print(line)
+    if info.problems:
+        raise typer.Exit(1)
 
 
 def main() -> None:

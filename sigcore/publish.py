@@ -121,8 +121,26 @@ class Publication:
         return self.msg_type if "/" in self.msg_type else f"sigcore_msgs/msg/{self.msg_type}"
 
 
+@dataclass(frozen=True)
+class Offered:
+    """The QoS a publisher offers, as a recorder keeps it (rosbag2's ``offered_qos_profiles``): keep last
+    ``depth``, reliable or best effort, transient local (latched) or volatile."""
+
+    depth: int
+    reliable: bool = True
+    latched: bool = False
+
+
+OFFERED: dict[str, Offered] = {"state": Offered(10), "sensor": Offered(5), "events": Offered(50),
+                               "latched": Offered(1, latched=True), "tf": Offered(100)}
+"""The QoS each class is offered with by default (REP-2003; the ROS 2 transport's defaults)."""
+
+
 class PublicationSink(ABC):
     """What a transport (or a recorder) implements to receive publications."""
+
+    takes_raw: bool = False
+    """Whether the sink also takes the transports' own serialized messages (:meth:`raw`): a recorder does."""
 
     @abstractmethod
     def declare(self, publication: Publication) -> None:
@@ -139,6 +157,11 @@ class PublicationSink(ABC):
         """Whether values of ``publication`` reach anyone now (ROS 2: it has subscribers); default: True. Costly
         values (camera images) are computed only when some sink wants them."""
         return True
+
+    def raw(self, topic: str, msg_type: str, offered: Offered, stamp_ns: int, data: bytes) -> None:  # noqa: B027
+        """A message a transport published on a topic of its own (not declared here: ``/clock``, its ``/tf``, odometry,
+        joint states, scans), already serialized (CDR) under its full name; only sinks that set :attr:`takes_raw`
+        get them. Called on the simulation thread; default: nothing."""
 
 
 class Publisher:
@@ -180,6 +203,7 @@ class Publications:
         self._sinks: list[PublicationSink] = []
         self._latched: dict[str, tuple[int, dict[str, Any]]] = {}
         self._failed: set[tuple[int, str]] = set()
+        self._raw: list[PublicationSink] = []
 
     # ------------------------------------------------------------------ declaring
     def declare(self, publication: Publication) -> Publisher:
@@ -238,6 +262,7 @@ class Publications:
             first, self._on_first_sink = self._on_first_sink, None
             first()
         self._sinks.append(sink)
+        self._raw = [s for s in self._sinks if s.takes_raw]
         for publication in self._declared.values():
             self._call(sink, "declare", sink.declare, publication)
         for topic, (stamp, value) in self._latched.items():
@@ -258,6 +283,26 @@ class Publications:
         """Stop delivering to ``sink`` (no error if it was not connected)."""
         if sink in self._sinks:
             self._sinks.remove(sink)
+        self._raw = [s for s in self._sinks if s.takes_raw]
+
+    @property
+    def raw_wanted(self) -> bool:
+        """Whether a connected sink takes the transports' own serialized messages (a transport serializes a message
+        it would not otherwise only when this is true)."""
+        return bool(self._raw)
+
+    def raw(self, topic: str, msg_type: str, offered: Offered, stamp_ns: int, data: bytes) -> None:
+        """Hand a transport's own serialized message to the sinks that take them (:meth:`PublicationSink.raw`); a
+        sink's failure is logged once per topic, like :meth:`push`."""
+        for sink in self._raw:
+            try:
+                sink.raw(topic, msg_type, offered, stamp_ns, data)
+            except Exception:
+                key = (id(sink), f"raw:{topic}")
+                if key not in self._failed:
+                    self._failed.add(key)
+                    log.exception("raw %s by %s failed (logged once; the simulation goes on)", topic,
+                                  type(sink).__name__)
 
     # ------------------------------------------------------------------ values
     def push(self, publication: Publication, value: dict[str, Any], stamp_ns: int | None = None) -> None:

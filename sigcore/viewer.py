@@ -12,6 +12,8 @@ control (``sim.control``). It never names a feature. Plugins register viewers wi
 from __future__ import annotations
 
 from abc import abstractmethod
+from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .transport import Endpoint, Transport, TransportError
@@ -69,6 +71,17 @@ class Viewer(Transport):
         Raises:
             ViewerError: it cannot listen as asked (the port is taken...).
         """
+
+    def play_recording(self, path: Path, stop: Callable[[], bool]) -> None:
+        """Show the recording ``path`` (a bag directory made by ``sigcore run --record``, already checked with
+        :func:`sigcore.record.bag_info`) instead of a running simulation (``sigcore view DIR``): the scene from its
+        ground truth, the texts from its publications at each moment, with a timeline the person can scrub. Called
+        after :meth:`open`; returns when ``stop()`` is true (Ctrl-C). Default: a viewer that cannot.
+
+        Raises:
+            ViewerError: this viewer cannot show recordings, or this one cannot be shown (naming why).
+        """
+        raise ViewerError(f"viewer '{self.name}' cannot show recordings")
 
     def plan(self, sim: Simulation) -> list[Endpoint]:
         """A viewer creates no named endpoints."""

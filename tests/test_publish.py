@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 
 from sigcore.api.table import api_table
-from sigcore.publish import Publication, PublicationError, Publications, PublicationSink
+from sigcore.publish import Offered, Publication, PublicationError, Publications, PublicationSink
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
 
@@ -150,3 +150,41 @@ def test_the_static_tree_has_one_parent_per_frame_and_slam_reparents_odom(tmp_pa
     assert latest is not None and "odom" not in {t["child_frame_id"] for t in latest[1]["transforms"]}
     topics = {p.topic: p.origin for p in slam.publications.declared}
     assert topics["/map"] == topics["/robot_000/slam_pose"] == "slam"
+
+
+class RawTaker(Recorder):
+    """A sink that also takes the transports' own serialized messages (a recorder)."""
+
+    takes_raw = True
+
+    def __init__(self, fail: bool = False) -> None:
+        super().__init__()
+        self.raws: list[tuple[str, str, Offered, int, bytes]] = []
+        self.fail = fail
+
+    def raw(self, topic: str, msg_type: str, offered: Offered, stamp_ns: int, data: bytes) -> None:
+        if self.fail:
+            raise RuntimeError("broken raw")
+        self.raws.append((topic, msg_type, offered, stamp_ns, data))
+
+
+def test_raw_messages_reach_only_sinks_that_take_them(caplog: pytest.LogCaptureFixture) -> None:
+    """raw_wanted is true only while a sink that takes raw messages is connected; those sinks get each one (a
+    failing one is logged once and the others still get them); the others never see them."""
+    pubs = Publications(lambda: 0)
+    plain, taker, broken = Recorder(), RawTaker(), RawTaker(fail=True)
+    pubs.connect(plain)
+    assert not pubs.raw_wanted
+    pubs.connect(broken)
+    pubs.connect(taker)
+    assert pubs.raw_wanted
+    offered = Offered(1, latched=True)
+    with caplog.at_level(logging.ERROR, logger="sigcore"):
+        for i in range(3):
+            pubs.raw("/clock", "rosgraph_msgs/msg/Clock", offered, i, b"\x00\x01\x00\x00" + bytes([i]))
+    assert [(t, s, d[-1]) for t, _, _, s, d in taker.raws] == [("/clock", 0, 0), ("/clock", 1, 1), ("/clock", 2, 2)]
+    assert taker.raws[0][2] == offered and not plain.values
+    assert sum("raw /clock by RawTaker failed" in r.getMessage() for r in caplog.records) == 1
+    pubs.disconnect(taker)
+    pubs.disconnect(broken)
+    assert not pubs.raw_wanted

@@ -2,7 +2,7 @@
 """Run the clean-up task end to end over ROS 2: the simulator (headless, with the referee) and the two example
 nodes as separate processes. Prints the referee's score table; exits 0 when every trash item is in its correct box.
 
-Usage: .venv/bin/python examples/cleanup/run_task.py [--factor 2.5] [--backend mujoco] [--timeout 240]
+Usage: .venv/bin/python examples/cleanup/run_task.py [--factor 2.5] [--backend mujoco] [--timeout 240] [--record DIR]
 """
 
 from __future__ import annotations
@@ -39,6 +39,8 @@ def main() -> int:
     ap.add_argument("--backend", default="mujoco")
     ap.add_argument("--timeout", type=float, default=240.0, help="give up after this many wall seconds")
     ap.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (default: from the process id)")
+    ap.add_argument("--record", default=None, metavar="DIR",
+                    help="record the run into DIR (rosbag2, MCAP): sigcore bag info DIR, sigcore replay DIR")
     ap.add_argument("--referee-log", default=None,
                     help="the moderator writes the referee topics it received here (JSON)")
     args = ap.parse_args()
@@ -49,7 +51,8 @@ def main() -> int:
     # referee's events (docs/ros2.md, "Readiness"): neither node misses the task's beginning
     sim = _start([sys.executable, "-m", "sigcore", "run", str(ROOT / "worlds" / "cleanup.xml"), "--transport", "ros2",
                   "--backend", args.backend, "--factor", str(args.factor), "--duration", "600", "--quiet",
-                  "--wait-for", "/robot_000/cmd_vel", "--wait-for", "/referee/events"], env)
+                  "--wait-for", "/robot_000/cmd_vel", "--wait-for", "/referee/events",
+                  *(["--record", args.record] if args.record else [])], env)
     moderator = [sys.executable, str(HERE / "moderator_node.py")]
     if args.referee_log:
         moderator += ["--log", args.referee_log]

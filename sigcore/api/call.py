@@ -43,6 +43,8 @@ def call(sim: Simulation, entry: ApiEntry, agent: str,
         if isinstance(request, BaseModel) and not isinstance(request, entry.request):
             request = request.model_dump()
         req = request if isinstance(request, entry.request) else entry.request.model_validate(request or {})
+        if sim.inputs.wanted:
+            sim.inputs.note("api", agent=agent, entry=entry.suffix, request=req.model_dump(mode="json"))
         fields = entry.handler(sim, agent, req) or {}
         if isinstance(fields, Deferred):
             return fields

@@ -32,6 +32,12 @@ def _fields(model: type[BaseModel]) -> str:
     return "".join(f"{t} {name}\n" for t, name in field_types(model))
 
 
+def message_definition(model: type[BaseModel]) -> str:
+    """The ``.msg`` body of the ``sigcore_msgs`` message defined by ``model`` (one ``type name`` line per field), as
+    ``sigcore interfaces`` writes it, without comments."""
+    return _fields(model)
+
+
 def _doc(model: type[BaseModel]) -> str:
     return "".join(f"# {line}\n" for line in (model.__doc__ or "").strip().splitlines())
 

@@ -41,6 +41,7 @@ from .feature_guard import OBSERVER_LISTS, FeatureFailure, FeatureGuard
 from .frames import Frames
 from .grasps import Grasps
 from .info import EntityInfos
+from .inputs import Inputs
 from .lidar import LidarSensor, Scan
 from .modes import Mode, Modes
 from .odometry import WheelOdometry
@@ -108,9 +109,13 @@ class Simulation:
         self._time_before = 0.0
         self._source_observers: dict[int, object] = {}  # observers the agents' publication sources attached
         self._sources_attached = False
+        self.inputs = Inputs(self)
+        """The input log: commands applied from outside (transports, viewers), for recordings and replays."""
         self.publications = Publications(lambda: self.step_count * self._dt_ns, self._attach_sources)
         self._started = False  # between start() and stop()
         self._first_source: Path | None = world.source if world.source.is_file() else None
+        self.controller_overrides: dict[str, str] = dict(controllers or {})
+        """The controllers given at construction instead of the world file's (a recording keeps them)."""
         self._setup(world, backend if isinstance(backend, Backend) else self._backend_class(), controllers or {})
 
     def _setup(self, world: World, backend: Backend, controllers: dict[str, str], notify: bool = True) -> None:
@@ -788,6 +793,11 @@ class Simulation:
         report."""
         self._step_observers.append(observer)
 
+    def remove_step_observer(self, observer: StepObserver) -> None:
+        """Stop calling ``observer`` after each step (no error if it is not attached)."""
+        if observer in self._step_observers:
+            self._step_observers.remove(observer)
+
     def _contain(self, observer: object, exc: BaseException, where: str) -> bool:
         """``observer`` raised ``exc``: disable the feature that owns it and return True, or False if no feature
         does (the caller re-raises)."""
@@ -889,6 +899,7 @@ class Simulation:
                 were deleted (at their world-file pose, with new controllers), as simulation_interfaces' full
                 reset does; False: only restore states (spawned entities go back to their state as spawned).
         """
+        self.inputs.note("reset", despawn=despawn)
         self.cameras.settle()
         if despawn:
             if self.spawned:

@@ -54,9 +54,11 @@ def test_spawned_while_playing_fall_and_rest_on_the_floor(out: dict) -> None:
     assert out["many"]["result"] == OK
     assert out["many"]["results"] == [{"result": OK, "name": "crate"}, {"result": OK, "name": "rover2"}]
     assert out["paused"] == OK and out["step"] == OK
-    # How far the crate fell before the pause depends on wall time (a loaded machine may pause after it landed), so
-    # only its bounds are asserted: between where it was dropped (0.8 m) and resting on the floor (0.05 m).
-    assert 0.05 - REST < out["z0"]["crate"] <= 0.8 + 1e-6
+    # How far the crate fell before the pause depends on wall time (a loaded machine may pause after it landed, or
+    # while it lands), so only its bounds are asserted: at most where it was dropped (0.8 m), and above the floor's
+    # surface. Landing at ~4 m/s, soft contacts let the 0.1 m box sink transiently by a few cm (CI saw its centre
+    # at 0.028 m), so the lower bound is the floor (z = 0), not its resting height (0.05 m).
+    assert 0.0 < out["z0"]["crate"] <= 0.8 + 1e-6
     assert abs(out["z"]["crate"] - 0.05) < REST
     assert abs(out["z"]["rover"]) < REST and abs(out["z"]["rover2"]) < REST
 

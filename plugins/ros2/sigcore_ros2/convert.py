@@ -12,6 +12,7 @@ from builtin_interfaces.msg import Time
 from pydantic import BaseModel
 
 from sigcore.api.table import ApiEntry
+from sigcore.publish import Offered
 
 from .publications import fill_message
 
@@ -55,3 +56,21 @@ def fill(msg: Any, fields: dict[str, Any]) -> Any:
 def finite(*values: float) -> bool:
     """Whether every value is a finite number."""
     return all(math.isfinite(v) for v in values)
+
+
+_OFFERED: dict[int, tuple[Any, tuple[str, str, Offered]]] = {}
+
+
+def offered(pub: Any) -> tuple[str, str, Offered]:
+    """``(full topic name, type name, offered QoS)`` of an rclpy publisher, as a recorder keeps them (cached per
+    publisher: the cache holds the publisher, so its id is not reused while cached)."""
+    hit = _OFFERED.get(id(pub))
+    if hit is None or hit[0] is not pub:
+        from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+
+        cls, qos = pub.msg_type, pub.qos_profile
+        package = cls.__module__.split(".")[0]
+        hit = _OFFERED[id(pub)] = (pub, (pub.topic_name, f"{package}/msg/{cls.__name__}",
+                                         Offered(qos.depth, qos.reliability == ReliabilityPolicy.RELIABLE,
+                                                 qos.durability == DurabilityPolicy.TRANSIENT_LOCAL)))
+    return hit[1]

@@ -316,6 +316,10 @@ class SimInterfaces:
         except ApiError as e:
             res.result = _result(Result.RESULT_OPERATION_FAILED, str(e))
             return False
+        dynamic = self.sim.mode(req.entity, "dynamics")
+        self.sim.inputs.note("entity_state", entity=req.entity, position=[p.x, p.y, p.z], quaternion=list(q),
+                             linear=[lin.x, lin.y, lin.z] if dynamic else None,
+                             angular=[ang.x, ang.y, ang.z] if dynamic else None)
         res.result = _result(Result.RESULT_OK)
         return False
 
@@ -335,6 +339,7 @@ class SimInterfaces:
     def _spawn_entity(self, req: Any, res: Any, reply: Any) -> bool:
         self._require_changeable("spawning")
         outcome = self.sim.spawn([_spawn_request(req, req.uri, req.resource_string)])[0]
+        self.sim.inputs.note("spawn", what=f"spawn_entity {req.name or req.uri}")
         res.result, res.entity_name = _spawned(outcome)
         return False
 
@@ -343,6 +348,7 @@ class SimInterfaces:
         requests = [_spawn_request(r, r.entity_resource.uri, r.entity_resource.resource_string)
                     for r in req.spawn_requests]
         outcomes = self.sim.spawn(requests) if requests else []
+        self.sim.inputs.note("spawn", what=f"spawn_entities ({len(requests)})")
         res.results = []
         for outcome in outcomes:
             result, name = _spawned(outcome)
@@ -362,6 +368,7 @@ class SimInterfaces:
         self._require_changeable("deleting")
         try:
             self.sim.delete([req.entity])
+            self.sim.inputs.note("delete", what=f"delete_entity {req.entity}")
         except SpawnRefusal as refusal:
             res.result = _result(SPAWN_CODES[refusal.code], str(refusal))
             return False

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from geometry_msgs.msg import TransformStamped, Twist
 from nav_msgs.msg import Odometry
+from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState, LaserScan
 from tf2_msgs.msg import TFMessage
@@ -31,6 +32,7 @@ from sigcore.text import clip
 from sigcore.transport import Endpoint
 
 from .cdr import CdrTemplate
+from .convert import offered
 from .publications import fill_message
 from .qos import Qos
 
@@ -225,6 +227,7 @@ class StandardEndpoints:
             except ApiError as e:  # the transport's log filter lets one record per (topic, kind) through
                 log.warning("%s refused: %s", topic, clip(str(e)), extra=log_key(topic, type(e).__name__))
                 return
+            self.sim.inputs.note("base_velocity", robot=robot.name, linear=msg.linear.x, angular=msg.angular.z)
             if steps:
                 self._cmd_vel_deadline[robot.name] = self.sim.step_count + steps
 
@@ -237,6 +240,7 @@ class StandardEndpoints:
             if step >= deadline:
                 del self._cmd_vel_deadline[name]
                 self.sim.robot(name).set_wheel_velocity(0.0, 0.0)
+                self.sim.inputs.note("wheel_velocity", robot=name, left=0.0, right=0.0)
                 if name not in self._timed_out:
                     self._timed_out.add(name)
                     log.info("/%s/cmd_vel: no message for %g s: wheels stopped (cmd_vel_timeout of its <drive>; "
@@ -263,7 +267,7 @@ class StandardEndpoints:
         """Publish the current time now (at start, after a reset, when the simulation goes idle, and by the /clock
         policy of :meth:`on_step`)."""
         n = self.sim.step_count
-        self.clock_pub.publish(self._clock.pack(*divmod(n * self.dt_ns, 1_000_000_000)))
+        self._send(self.clock_pub, self._clock.pack(*divmod(n * self.dt_ns, 1_000_000_000)))
         self.clock_step = n
         if self.clock_gap > 0:
             self._next_clock = time.monotonic() + self.clock_gap
@@ -291,18 +295,19 @@ class StandardEndpoints:
         for odo, pub, template, tf in self._odom:
             s = odo.state
             qz, qw = math.sin(s.yaw / 2), math.cos(s.yaw / 2)
-            pub.publish(template.pack(sec, nanosec, s.x, s.y, qz, qw, s.v, s.w))
+            self._send(pub, template.pack(sec, nanosec, s.x, s.y, qz, qw, s.v, s.w))
             if tf:
                 poses += (sec, nanosec, s.x, s.y, 0.0, 0.0, 0.0, qz, qw)
         backend, transforms = sim.backend, sim.frames.transforms
         for name, joints, pub, template, moving in self._joint_states:
             positions = [backend.get_joint_angle(name, j) for j in joints]
-            pub.publish(template.pack(sec, nanosec, *positions, *[backend.get_joint_velocity(name, j) for j in joints]))
+            self._send(pub, template.pack(sec, nanosec, *positions,
+                                          *[backend.get_joint_velocity(name, j) for j in joints]))
             if moving:
                 for _, _, (x, y, z), (w, qx, qy, qz) in transforms(name, positions):
                     poses += (sec, nanosec, x, y, z, qx, qy, qz, w)
         if self._tf is not None:
-            self.tf_pub.publish(self._tf.pack(*poses))
+            self._send(self.tf_pub, self._tf.pack(*poses))
         if entities and self._entity_tf is not None:
             self.publish_entities()
 
@@ -315,7 +320,7 @@ class StandardEndpoints:
         values: list[float] = []
         for _, _, (x, y, z), (w, qx, qy, qz) in self.sim.frames.entity_transforms():
             values += (sec, nanosec, x, y, z, qx, qy, qz, w)
-        self.tf_pub.publish(self._entity_tf.pack(*values))
+        self._send(self.tf_pub, self._entity_tf.pack(*values))
 
     def _scan(self, scan: Scan) -> None:
         pub = self.scan_pub.get((scan.robot, scan.lidar))
@@ -323,7 +328,19 @@ class StandardEndpoints:
             if self.clock_behind:  # the /clock policy: a scan never runs ahead of /clock
                 self.publish_clock()
             stamp = round(scan.stamp / self.sim.dt) * self.dt_ns
-            pub.publish(fill_message(LaserScan(), scan.fields(self.sim.frames.name(scan.robot, scan.frame), stamp)))
+            msg = fill_message(LaserScan(), scan.fields(self.sim.frames.name(scan.robot, scan.frame), stamp))
+            if self.sim.publications.raw_wanted:  # a recorder takes the serialized message
+                self._send(pub, serialize_message(msg), stamp)
+            else:
+                pub.publish(msg)
+
+    def _send(self, pub: Any, data: bytes, stamp_ns: int | None = None) -> None:
+        """Publish serialized ``data`` on ``pub`` and hand it to the recorders, if any (the publication contract's
+        :meth:`~sigcore.publish.Publications.raw`), stamped ``stamp_ns`` (default: the current step)."""
+        pub.publish(data)
+        publications = self.sim.publications
+        if publications.raw_wanted:
+            publications.raw(*offered(pub), self.sim.stamp_ns if stamp_ns is None else stamp_ns, data)
 
 
 def _odometry(frame: str, child: str, pose: tuple[float, ...], twist: tuple[float, ...]) -> CdrTemplate:

@@ -244,7 +244,7 @@ class Ros2Transport(Transport):
         self._ready = node.create_publisher(Bool, READY_TOPIC, qos.latched(READY_TOPIC))
         self._fixed[READY_TOPIC] = "std_msgs/msg/Bool"
         self.endpoints[READY_TOPIC] = "std_msgs/msg/Bool"
-        self._ready.publish(Bool(data=True))
+        self._announce(True)
         log.info("ROS 2 transport ready: %d endpoints", len(self.endpoints))
 
     def service(self, timeout: float) -> None:
@@ -267,8 +267,6 @@ class Ros2Transport(Transport):
         """Answer what is still held, announce not-ready, and close every endpoint."""
         if self._context is None:
             return
-        from std_msgs.msg import Bool
-
         try:
             if self._sim is not None:
                 if self._entities_changed in self._sim.entity_observers:
@@ -284,7 +282,7 @@ class Ros2Transport(Transport):
             self.interfaces.fail_waiters("the simulation stopped")
             if self.sigros is not None:
                 self.sigros.refuse_held("the simulation stopped")
-            self._ready.publish(Bool(data=False))
+            self._announce(False)
         finally:
             self.action.closing = True
             self._receiver.stop()
@@ -298,6 +296,19 @@ class Ros2Transport(Transport):
             self._filter.summary(log, force=True)
             for name in ("sigcore.api", "sigcore.ros2"):
                 logging.getLogger(name).removeFilter(self._filter)
+
+    def _announce(self, ready: bool) -> None:
+        """Publish readiness (latched), and hand it to the recorders (the publication contract's ``raw``)."""
+        from rclpy.serialization import serialize_message
+        from std_msgs.msg import Bool
+
+        from .convert import offered
+
+        data = serialize_message(Bool(data=ready))
+        self._ready.publish(data)
+        sim = self._sim
+        if sim is not None and sim.publications.raw_wanted:
+            sim.publications.raw(*offered(self._ready), sim.stamp_ns, data)
 
     # ------------------------------------------------------------------ entities added and removed
     def _selected(self, agent: str) -> bool:

@@ -150,6 +150,7 @@ class WorldServices:
         except WorldRefusal as refusal:
             raise _load_refusal(refusal, req) from None
         try:
+            sim.inputs.note("world", what=f"load_world {world.name}")
             sim.load_world(world)
         except WorldRefusal as refusal:
             raise _load_refusal(refusal, req) from None
@@ -169,6 +170,7 @@ class WorldServices:
         if not self.sim.loaded:
             res.result = Result(result=UnloadWorld.Response.NO_WORLD_LOADED, error_message=NO_WORLD)
             return False
+        self.sim.inputs.note("world", what="unload_world")
         self.sim.unload_world()
         self._text = None
         res.result = _ok()

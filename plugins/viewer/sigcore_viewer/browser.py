@@ -120,10 +120,10 @@ class Browser:
         self.driver.find_element("xpath", f"//button[normalize-space()='{label}']").click()
 
     def field(self, label: str) -> Any:
-        """The input next to the label ``label``."""
+        """The input next to the label ``label`` (a slider's: the number box beside it)."""
         return self.driver.find_element(
             "xpath", f"//label[normalize-space()='{label}']/ancestor::div[contains(@class,'mantine-Flex-root')][1]"
-                     "//input")
+                     "//input[not(@type='hidden')]")
 
     def type(self, label: str, text: str) -> None:
         """Replace the text of the field labelled ``label`` by ``text``."""

@@ -7,7 +7,8 @@ millisecond) and writes it to the socket. Three threads:
 
 * the **main thread** reads the simulation's messages: snapshots (into a one-snapshot mailbox: one the push thread
   had no time for is replaced by the next, what it carried that is shown once - a new layout, a map, images - kept),
-  the selected entity, overlay switches, probes of a node's pose, ``stop``;
+  the selected entity, overlay switches, probes of a node's pose, a recording's timeline (``sigcore view DIR``: the
+  panel turns into a player), ``stop``;
 * the **push thread** turns the newest snapshot into viser updates (only what changed is sent) and reports each
   as pushed;
 * **viser's threads** serve the page and call the panel's callbacks, which send the person's requests to the
@@ -81,6 +82,8 @@ class Front:
             self.panel.show_switch(key, bool(on))
         elif kind == "probe":
             self._post(("probed", message[1], self.node_pose(message[1])))
+        elif kind == "playback":
+            self.panel.playback(message[1])
         elif kind == "stop":
             return False
         else:
@@ -134,7 +137,8 @@ class Front:
         with self._server.atomic():
             if snap.layout is not None:
                 self.nodes.build(snap.layout, self._overlays)
-            self.nodes.move(snap.poses, self._overlays["frames"])
+            self.nodes.move(snap.poses, self._overlays["frames"], snap.exact)
+            self.nodes.hide(snap.hidden)
             self.nodes.overlays(snap, self._overlays)
             self.panel.update(snap)
         self._post(("pushed", snap.step, snap.wall, time.perf_counter()))

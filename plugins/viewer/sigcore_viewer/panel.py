@@ -1,19 +1,27 @@
 """The viewer's side panel: the run's controls, the task's score and events, messages to agents, the selected
 entity, the overlays. It lives in the viewer's process: its callbacks (viser's threads) only send the person's
 requests to the simulation, as plain tuples (``("step", 100)``, ``("send", agent, text)``...); :meth:`Panel.update`
-(the push thread) shows a snapshot. One panel is shared by every browser: they all see and steer the same run."""
+(the push thread) shows a snapshot. One panel is shared by every browser: they all see and steer the same run.
+
+For a recording (``sigcore view DIR``, :meth:`Panel.playback`) the "Run" folder becomes "Playback": play, pause, a
+time slider to scrub, the speed, jumps to the start and the end; the live run's controls are hidden or disabled."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from . import viewer as v
 
 if TYPE_CHECKING:
+    from .playback import Timeline
     from .viewer import Snapshot
 
 NONE = "(none)"
+HOLD = 0.6
+"""Wall seconds after a person moved the time slider during which the playback does not move it (so that it does
+not jump back under the person's pointer while the seek is on its way)."""
 
 
 class Panel:
@@ -35,9 +43,13 @@ class Panel:
         self._drag: Any = None
         self._drag_name: str | None = None
         self._images: dict[str, Any] = {}
+        self.time: Any = None  # a recording's timeline (playback)
+        self.speed: Any = None
+        self._touched = 0.0
 
         self.notes = gui.add_markdown("")
-        with gui.add_folder("Run"):
+        self.run = gui.add_folder("Run")
+        with self.run:
             self.status = gui.add_markdown("starting")
             self.play = gui.add_button("Play", hint="run the simulation")
             self.pause = gui.add_button("Pause", hint="pause the simulation")
@@ -49,7 +61,8 @@ class Panel:
             self.result = gui.add_markdown("")
             self.score = gui.add_markdown("")
             self.events = gui.add_markdown("")
-        with gui.add_folder("Message"):
+        self.messages = gui.add_folder("Message")
+        with self.messages:
             self.to = gui.add_dropdown("To", (NONE,), initial_value=NONE)
             self.message = gui.add_text("Message", initial_value="")
             self.send = gui.add_button("Send", hint="deliver the text to the agent (on_recv_msg, <agent>_onRecvMsg)")
@@ -95,6 +108,58 @@ class Panel:
         else:
             self._hide_drag()
 
+    # ------------------------------------------------------------------ a recording
+    def playback(self, timeline: Timeline) -> None:
+        """The viewer plays a recording back: the "Run" folder becomes the player (play, pause, the time slider, the
+        speed, to start, to end); step, reset, the pace and messages are hidden, dragging and overlays the recording
+        cannot show are disabled, and a note at the top says what is shown."""
+        gui = self._server.gui
+        post = self._post
+        self.run.label = "Playback"
+        for handle in (self.steps, self.step, self.reset, self.pace, self.messages):
+            handle.visible = False
+        self.play.hint = "play the recording from the time shown (from the start at the end)"
+        self.pause.hint = "hold the recording at the time shown"
+        self.drag.disabled = True
+        self.drag.value = False
+        self.drag.hint = "a recording cannot be changed: dragging belongs to live runs"
+        for key, box in self.switches.items():
+            if not timeline.overlays.get(key, False):
+                box.disabled = True
+                box.hint = "not in this recording"
+        gui.add_markdown(timeline.note, order=self.notes.order - 0.5)
+        with self.run:
+            start, end = float(timeline.start), float(timeline.end)
+            self.time = gui.add_slider("Time [s]", min=start, max=end, step=0.01, initial_value=start,
+                                       hint="simulated time: drag to scrub, or type a time")
+            self.speed = gui.add_dropdown("Speed", timeline.speeds, initial_value=timeline.speed,
+                                          hint="simulated seconds per second of wall time")
+            to_start = gui.add_button("To start", hint="jump to the first moment of the recording")
+            to_end = gui.add_button("To end", hint="jump to the last moment of the recording")
+        slider, speed = self.time, self.speed
+
+        def seek(event: Any) -> None:
+            if event.client_id is not None:  # a person's move (showing the playback's time calls this too)
+                self._touched = time.monotonic()
+                post(("seek", float(slider.value)))
+        slider.on_update(seek)
+        speed.on_update(lambda e: post(("speed", speed.value)) if e.client_id is not None else None)
+        to_start.on_click(lambda _e: post(("seek", "start")))
+        to_end.on_click(lambda _e: post(("seek", "end")))
+
+    def _show_timeline(self, timeline: tuple[float, bool, str]) -> None:
+        """Move the slider to the playback's time (unless a person just moved it) and show its speed."""
+        t, _, speed = timeline
+        slider = self.time
+        if slider is None:
+            return
+        if time.monotonic() - self._touched > HOLD:
+            value = min(max(round(t, 2), float(slider.min)), float(slider.max))
+            if abs(float(slider.value) - value) > 1e-9:
+                slider.value = value
+        if self.speed is not None and speed in self.speed.options and self.speed.value != speed:
+            self.speed.value = speed
+
     # ------------------------------------------------------------------ told by the simulation's process
     def selected(self, name: str, pose: tuple[Any, Any] | None) -> None:
         """``name`` was selected: show it in the list and put the drag handle on it (if it is on)."""
@@ -136,6 +201,8 @@ class Panel:
             self._texts["pace"] = snap.pace
             if snap.pace in self.pace.options and self.pace.value != snap.pace:
                 self.pace.value = snap.pace
+        if snap.timeline is not None:
+            self._show_timeline(snap.timeline)
         self._list(self.to, "to", snap.agents)
         self._list(self.entity, "entity", [NONE, *snap.entities])
         if snap.images:

@@ -140,6 +140,7 @@ class SceneNodes:
         self._direct = _messages is not None
         self._drawn = np.zeros(0, dtype=bool)
         self._parent = np.zeros(0, dtype=int)
+        self._hidden = np.zeros(0, dtype=bool)
 
     def build(self, layout: SceneLayout, overlays: dict[str, bool]) -> None:
         """Replace every node by those of ``layout``."""
@@ -168,6 +169,7 @@ class SceneNodes:
         self._sent = np.full((len(layout.frames), 7), np.inf)
         self._drawn = np.zeros(len(layout.frames), dtype=bool)  # frames with a visual or a name
         self._drawn[[i for i, _, _ in layout.visuals] + [i for i, _ in layout.labels]] = True
+        self._hidden = np.zeros(len(layout.frames), dtype=bool)
         self._shown = {"names": overlays["names"], "frames": overlays["frames"]}
         for node in self._overlay_nodes.values():
             node.remove()
@@ -181,9 +183,10 @@ class SceneNodes:
             camera.look_at = tuple(look)
             camera.up = (0.0, 0.0, 1.0)
 
-    def move(self, poses: np.ndarray, every_frame: bool = False) -> None:
+    def move(self, poses: np.ndarray, every_frame: bool = False, exact: bool = False) -> None:
         """Send the frames that moved: their position, their orientation or both, whichever changed by more than
-        :data:`MOVED`; frames without a visual or a name only when ``every_frame`` (the TF overlay shows them). A
+        :data:`MOVED` (``exact``: by anything at all, so that the scene shows the poses exactly: a recording paused or
+        scrubbed); frames without a visual or a name only when ``every_frame`` (the TF overlay shows them). A
         robot's links are nodes under its root link, posed relative to it: a robot that drives moves one node.
 
         The direct path hands viser its messages itself (which frames changed is already known here): a third of
@@ -191,7 +194,7 @@ class SceneNodes:
         if len(poses) != len(self._frames):
             return
         poses = relative(poses, self._parent)
-        changed = np.abs(poses - self._sent) > MOVED
+        changed = poses != self._sent if exact else np.abs(poses - self._sent) > MOVED
         if not every_frame:
             changed &= self._drawn[:, None]
         moved_at = np.flatnonzero(changed[:, :3].any(axis=1)).tolist()
@@ -218,6 +221,15 @@ class SceneNodes:
         self._sent[moved_at, :3] = poses[moved_at, :3]
         self._sent[turned, 3:] = poses[turned, 3:]
 
+    def hide(self, hidden: np.ndarray | None) -> None:
+        """Hide the frames ``hidden`` says (with their visuals and names; a recording's entity that was not in the
+        world at that moment) and show the others again; None: nothing changes."""
+        if hidden is None or len(hidden) != len(self._frames):
+            return
+        for i in np.flatnonzero(hidden != self._hidden).tolist():
+            self._frames[i].visible = not bool(hidden[i])
+        self._hidden = np.array(hidden, dtype=bool)
+
     def overlays(self, snap: Snapshot, overlays: dict[str, bool]) -> None:
         """Show or hide names and TF axes; the lidar points, contacts, the map and nothing else."""
         if self._shown.get("names") != overlays["names"]:
@@ -235,9 +247,10 @@ class SceneNodes:
             old = self._overlay_nodes.pop("map", None)
             if old is not None:
                 old.remove()
-            self._overlay_nodes["map"] = self._server.scene.add_image(
-                "/sigcore_map", image, width, height, position=centre, wxyz=quat, visible=overlays["map"],
-                cast_shadow=False, receive_shadow=False)
+            if image.size:  # an empty image: no map (a recording before its first map)
+                self._overlay_nodes["map"] = self._server.scene.add_image(
+                    "/sigcore_map", image, width, height, position=centre, wxyz=quat, visible=overlays["map"],
+                    cast_shadow=False, receive_shadow=False)
         elif "map" in self._overlay_nodes:
             self._overlay_nodes["map"].visible = overlays["map"]
 

@@ -11,6 +11,10 @@ Two processes, so that the browser's side never takes the simulation's interpret
   scene and the panel: it turns the newest snapshot into viser updates (only what changed is sent; one it had no
   time for is replaced by the next, so a slow browser never slows the simulation) and sends the person's controls
   back as plain requests. It ends with the simulation's process.
+
+A recording (``sigcore view DIR``, :meth:`WebViewer.play_recording`) is shown the same way: the playback
+(:mod:`sigcore_viewer.playback`: its clock and the moment's snapshot, from the recorded ground truth and publications)
+takes the simulation's place in this process, and the viewer's process shows its snapshots with a timeline.
 """
 
 from __future__ import annotations
@@ -22,9 +26,12 @@ import select
 import socket
 import subprocess
 import sys
+import tempfile
+import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from pathlib import Path
 from time import perf_counter
 from typing import TYPE_CHECKING, Any
 
@@ -90,6 +97,11 @@ class Snapshot:
         contacts: (n, 3) contact markers [m], or None when the overlay is off.
         grid: ``(image (h, w, 3) uint8, width [m], height [m], centre xyz, wxyz)`` of the newest map, or None.
         images: Camera images by topic (h, w, 3) uint8, new since the last snapshot.
+        pace: The run's pace (a name of :data:`PACES`).
+        exact: Send every frame whose pose changed at all (a recording paused or scrubbed: the scene shows the
+            moment exactly), not only those that moved more than :data:`~sigcore_viewer.scenebuild.MOVED`.
+        hidden: (frames,) frames to hide (a recording's entity not in the world at that moment), or None.
+        timeline: A recording's ``(time [s], playing, speed name)``, or None for a live run.
     """
 
     step: int
@@ -106,6 +118,9 @@ class Snapshot:
     grid: tuple[np.ndarray, float, float, np.ndarray, np.ndarray] | None = None
     images: dict[str, np.ndarray] = field(default_factory=dict)
     pace: str = "real time"
+    exact: bool = False
+    hidden: np.ndarray | None = None
+    timeline: tuple[float, bool, str] | None = None
 
 
 @dataclass(frozen=True)
@@ -215,6 +230,9 @@ class WebViewer(Viewer):
         self._grid_sent = -1
         self._images_sent: dict[str, int] = {}
         self._probed: dict[str, Any] = {}
+        self._probe_cond = threading.Condition()
+        self._probe_requests: collections.deque[str] = collections.deque()  # node_pose from another thread
+        self._player_thread: threading.Thread | None = None  # the thread playing a recording back
         self.pushed = 0
         """Snapshots the viewer's process has handed to viser, which sends them to the browsers (as reported)."""
         self.push_observers: list[Callable[[Pushed], None]] = []
@@ -323,6 +341,88 @@ class WebViewer(Viewer):
             _end(self._proc)
         self._proc, self._sock, self._outbox, self._inbox, self._listening = None, None, None, None, None
 
+    # ------------------------------------------------------------------ a recording
+    def play_recording(self, path: Path, stop: Callable[[], bool]) -> None:
+        """Play the recording ``path`` back (``sigcore view DIR``) until ``stop()`` is true: the scene from its
+        ground truth, the score, events and result from its publications, and a timeline in the panel (play, pause,
+        speed, a slider to scrub, jumps to the start and the end); see :mod:`sigcore_viewer.playback`. Like a live
+        run, the playback runs in this process (its clock, the person's requests, a snapshot of the moment at most
+        ``rate`` times a second while playing) and the viewer's process shows the snapshots; it never blocks on the
+        browsers.
+
+        Raises:
+            ViewerError: this viewer shows a running simulation, the recording's world cannot be rebuilt or it holds
+                no ground truth (naming the file and what is missing), or the viewer's process ended.
+        """
+        from . import playback
+
+        if self._sim is not None:
+            raise ViewerError("this viewer shows a running simulation: it cannot play a recording as well")
+        self.open()
+        self._send(("snap", playback.loading(Path(path), perf_counter())))
+        self._flush()
+        with tempfile.TemporaryDirectory(prefix="sigcore_view_") as workdir:  # the attached world, while shown
+            try:
+                recorded = playback.load(Path(path), Path(workdir), stop)
+            except playback.Interrupted:
+                return
+            player = playback.Player(recorded, self._overlays)
+            self._player_thread = threading.current_thread()
+            try:
+                self._send(("playback", player.timeline()))
+                self._play(player, stop)
+            finally:
+                self._player_thread = None
+
+    def _play(self, player: Any, stop: Callable[[], bool]) -> None:
+        """The playback's loop: wait for the person's requests (at most until the next snapshot is due, or 0.1 s to
+        see ``stop()``), act on them, send a snapshot when something changed or, while playing, at ``rate``."""
+        interval = 1.0 / self.rate
+        next_snapshot = 0.0
+        while not stop():
+            sock, inbox, outbox = self._sock, self._inbox, self._outbox
+            if sock is None or inbox is None or outbox is None:
+                deadline = time.monotonic() + 0.5  # a signal to the process group ends both: this one is told too
+                while time.monotonic() < deadline:
+                    if stop():
+                        return
+                    time.sleep(0.02)
+                code = None
+                if self._proc is not None:
+                    _end(self._proc)
+                    code = self._proc.returncode
+                raise ViewerError(f"the viewer's process ended (exit code {code}): nothing shows the recording any "
+                                  "more")
+            now = perf_counter()
+            wait = 0.1
+            if player.dirty or player.playing:
+                wait = min(wait, max(0.0, next_snapshot - now))
+            if not outbox.empty:
+                wait = min(wait, 0.005)
+            if self._probe_requests:
+                wait = 0.0
+            select.select([sock], [], [], wait)
+            try:
+                messages = inbox.read()
+            except (PeerGone, ValueError):
+                sock.close()  # the viewer's process ended (with this one, at Ctrl-C or a signal: stop() says)
+                self._sock, self._outbox, self._inbox = None, None, None
+                continue
+            for message in messages:
+                if not self._report(message):
+                    player.request(message, perf_counter())
+                    if message[0] == "select" and player.selected is not None:
+                        self._send(("selected", player.selected, None))
+            while self._probe_requests:
+                self._send(("probe", self._probe_requests.popleft()))
+            now = perf_counter()
+            if (player.dirty or player.playing) and now >= next_snapshot and self._flush():
+                next_snapshot = now + interval
+                snap = player.snapshot(now)
+                for watcher in list(self.snapshot_observers):
+                    watcher(snap)
+                self._send(("snap", snap))
+
     # ------------------------------------------------------------------ the simulation thread
     def service(self, timeout: float) -> None:
         """Between two steps: act on the person's requests (the socket is read at most every :data:`POLL` seconds
@@ -357,16 +457,25 @@ class WebViewer(Viewer):
             self._lost(e)
             return
         for message in messages:
-            kind = message[0]
-            if kind == "pushed":
-                self.pushed += 1
-                report = Pushed(*message[1:])
-                for observer in list(self.push_observers):
-                    observer(report)
-            elif kind == "probed":
-                self._probed[message[1]] = message[2]
-            else:
+            if not self._report(message):
                 self._run(sim, self._request(message))
+
+    def _report(self, message: tuple[Any, ...]) -> bool:
+        """Take a report of the viewer's process (a snapshot pushed to the browsers, a probed node's pose); False
+        when ``message`` is a person's request instead."""
+        kind = message[0]
+        if kind == "pushed":
+            self.pushed += 1
+            report = Pushed(*message[1:])
+            for observer in list(self.push_observers):
+                observer(report)
+            return True
+        if kind == "probed":
+            with self._probe_cond:
+                self._probed[message[1]] = message[2]
+                self._probe_cond.notify_all()
+            return True
+        return False
 
     def _request(self, message: tuple[Any, ...]) -> Command:
         """The command a person's request (from the panel, in the viewer's process) stands for."""
@@ -533,20 +642,8 @@ class WebViewer(Viewer):
 
     def _scan_points(self, poses: np.ndarray) -> np.ndarray:
         """The newest scan of every lidar as world points, from the pose of its frame in this snapshot."""
-        layout = self._layout
-        assert layout is not None
-        out = [np.zeros((0, 3))]
-        for scan in self._displays.scans.values():
-            index = layout.index.get(str(scan.get("header", {}).get("frame_id", "")))
-            if index is None:
-                continue
-            ranges = np.asarray(scan["ranges"], dtype=float)
-            angles = scan["angle_min"] + scan["angle_increment"] * np.arange(len(ranges))
-            ok = np.isfinite(ranges) & (ranges < scan["range_max"]) & (ranges >= scan["range_min"])
-            local = np.stack([ranges[ok] * np.cos(angles[ok]), ranges[ok] * np.sin(angles[ok]),
-                              np.zeros(int(ok.sum()))], axis=1)
-            out.append(local @ quat_to_matrix(poses[index, 3:]).T + poses[index, :3])
-        return np.vstack(out)
+        assert self._layout is not None
+        return scan_points(self._layout, self._displays.scans.values(), poses)
 
     def _contact_points(self, sim: Simulation) -> np.ndarray:
         """A marker at each part touching another entity (the floor contacts of wheels and casters left out)."""
@@ -614,9 +711,25 @@ class WebViewer(Viewer):
         relative to its parent node): what the browsers are sent. None when there is no such node. Serves the
         viewer while it waits (call it from the simulation thread; for tests and benches).
 
+        While a recording plays back (:meth:`play_recording`), call it from any other thread: the playback asks.
+
         Raises:
             ViewerError: the viewer's process did not answer within ``timeout`` seconds.
         """
+        player = self._player_thread
+        if player is not None and player is not threading.current_thread():
+            deadline = time.monotonic() + timeout
+            with self._probe_cond:
+                self._probed.pop(name, None)
+                self._probe_requests.append(name)
+                while name not in self._probed:
+                    left = deadline - time.monotonic()
+                    if left <= 0 or self._sock is None:
+                        raise ViewerError(f"the viewer's process did not say where node {name!r} is within "
+                                          f"{timeout:g} s")
+                    self._probe_cond.wait(min(left, 0.1))
+                answer: tuple[list[float], list[float]] | None = self._probed.pop(name)
+                return answer
         self._probed.pop(name, None)
         self._send(("probe", name))
         deadline = time.monotonic() + timeout
@@ -692,6 +805,7 @@ def send_message(agent: str, text: str) -> Command:
             return (f"agent {quote(agent)} no longer exists: the message was not sent; agents: "
                     f"{', '.join(sim.agents) or 'none'}")
         sim.send_msg(VIEWER_SENDER, agent, text)
+        sim.inputs.note("message", sender=VIEWER_SENDER, to=agent, text=text)
         return f"sent to {agent}: {clip(text, 80)}"
     return run
 
@@ -723,6 +837,23 @@ def move_entity(name: str, position: np.ndarray, wxyz: np.ndarray) -> Command:
 
 
 # ------------------------------------------------------------------ helpers
+def scan_points(layout: SceneLayout, scans: Iterable[dict[str, Any]], poses: np.ndarray) -> np.ndarray:
+    """``sensor_msgs/LaserScan`` values as (n, 3) world points, each from the pose of its frame in ``poses`` (the
+    layout's frames); scans of a frame the layout has not are left out."""
+    out = [np.zeros((0, 3))]
+    for scan in scans:
+        index = layout.index.get(str(scan.get("header", {}).get("frame_id", "")))
+        if index is None:
+            continue
+        ranges = np.asarray(scan["ranges"], dtype=float)
+        angles = scan["angle_min"] + scan["angle_increment"] * np.arange(len(ranges))
+        ok = np.isfinite(ranges) & (ranges < scan["range_max"]) & (ranges >= scan["range_min"])
+        local = np.stack([ranges[ok] * np.cos(angles[ok]), ranges[ok] * np.sin(angles[ok]),
+                          np.zeros(int(ok.sum()))], axis=1)
+        out.append(local @ quat_to_matrix(poses[index, 3:]).T + poses[index, :3])
+    return np.vstack(out)
+
+
 def _end(proc: subprocess.Popen[bytes]) -> None:
     """Wait for the viewer's process to end (it ends when told, or when its socket closes); stop it if it hangs."""
     try:

@@ -1,0 +1,218 @@
+"""``sigcore replay DIR``: re-simulate a recorded run from its world and its input log, with no client attached, and
+check it against the recorded ground truth.
+
+The recording holds the world file (an attachment; the original file is used when it is still there, unchanged),
+the backend, the controllers given on the command line, the step the run started at and ended at, and every command
+applied from outside with the step it took effect (``/sigcore/inputs``, :mod:`sigcore.sim.inputs`). A
+:class:`Replayer` is the run's only transport: serviced between steps like the ROS 2 transport was, it applies the
+commands of each step through the same core paths (an API call, a drive's velocity, a reset), and polls deferred
+answers after each step as the ROS 2 transport did. MuJoCo is deterministic: the ground truth of the last step is
+reproduced bit for bit. ``--until STEP`` stops at a step and hands the simulation, paused, to live clients.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..sim.inputs import Input, ReplayError
+from ..transport import Transport
+from .bag import BagError, BagInfo, bag_info, read_extras
+from .recorder import GROUND_TRUTH, INPUTS, truth_frames
+from .serialize import Serializer
+
+if TYPE_CHECKING:
+    from ..api.deferred import Deferred
+    from ..api.table import ApiEntry
+    from ..sim.simulation import Simulation
+    from ..world import World
+
+log = logging.getLogger("sigcore.record")
+
+__all__ = ["Recording", "ReplayError", "Replayer", "compare", "describe_inputs", "load_recording", "poses_now"]
+
+
+@dataclass
+class Recording:
+    """What a replay needs from a recording (:func:`load_recording`)."""
+
+    path: Path
+    info: BagInfo
+    facts: dict[str, str]
+    attachments: dict[str, bytes]
+    inputs: list[Input]
+    truth: list[tuple[int, dict[str, np.ndarray]]] = field(default_factory=list)
+    """Every ground-truth message: (step, child frame -> x, y, z, qw, qx, qy, qz)."""
+
+    @property
+    def start_step(self) -> int:
+        return int(self.facts.get("start_step", "0"))
+
+    @property
+    def final_step(self) -> int:
+        """The run's last step (that of the last ground truth, written when the run ended)."""
+        return self.truth[-1][0] if self.truth else self.start_step
+
+    @property
+    def controllers(self) -> dict[str, str]:
+        return dict(json.loads(self.facts.get("controllers") or "{}"))
+
+    def world(self, workdir: Path | None = None) -> World:
+        """The recorded world: its original file when it is there with the recorded content, else the attached
+        files written under ``workdir`` (a temporary folder by default).
+
+        Raises:
+            ReplayError: the world file is not attached (naming what the recording holds), or does not parse.
+        """
+        from ..world import WorldError, parse_world
+
+        name = self.facts.get("world_attachment", "")
+        text = self.attachments.get(name)
+        if text is None:
+            raise ReplayError(f"{self.path}: the world file is not attached ({name or 'no sigcore metadata'}); "
+                              f"attachments: {', '.join(self.attachments) or 'none'}")
+        original = Path(self.facts.get("world_file", ""))
+        try:
+            if original.is_file() and original.read_bytes() == text:
+                return parse_world(original)
+            folder = Path(workdir or tempfile.mkdtemp(prefix="sigcore_replay_"))
+            for rel, data in self.attachments.items():
+                target = folder / rel
+                target.parent.mkdir(parents=True, exist_ok=True)
+                target.write_bytes(data)
+            return parse_world(folder / name)
+        except WorldError as e:
+            raise ReplayError(f"{self.path}: the recorded world does not load: {e}") from None
+
+
+def load_recording(path: Path) -> Recording:
+    """Read what a replay needs from the recording ``path``.
+
+    Raises:
+        ReplayError: the recording is cut, foreign, or was not made by ``sigcore run --record`` (naming why).
+    """
+    from mcap.reader import make_reader
+
+    try:
+        info = bag_info(path)
+    except BagError as e:
+        raise ReplayError(str(e)) from None
+    if info.problems:
+        raise ReplayError(f"{path} cannot be replayed: {info.problems[0]}")
+    serializer = Serializer()
+    metadata, attachments = read_extras(info)
+    facts = metadata.get("sigcore", {})
+    if not facts:
+        raise ReplayError(f"{path} was not recorded by sigcore run --record (no 'sigcore' metadata record): it "
+                          "cannot be replayed")
+    dt_ns = round(float(facts["timestep"]) * 1e9)
+    inputs: list[Input] = []
+    truth: list[tuple[int, dict[str, np.ndarray]]] = []
+    for file in info.files:
+        with open(file, "rb") as f:
+            for _, channel, message in make_reader(f).iter_messages(topics=[INPUTS, GROUND_TRUTH]):
+                if channel.topic == INPUTS:
+                    text = serializer.deserialize("std_msgs/msg/String", message.data).data
+                    inputs.append(Input.from_json(json.loads(text)))
+                else:
+                    msg = serializer.deserialize("tf2_msgs/msg/TFMessage", message.data)
+                    truth.append((message.log_time // dt_ns, {
+                        tf.child_frame_id: np.array([tf.transform.translation.x, tf.transform.translation.y,
+                                                     tf.transform.translation.z, tf.transform.rotation.w,
+                                                     tf.transform.rotation.x, tf.transform.rotation.y,
+                                                     tf.transform.rotation.z]) for tf in msg.transforms}))
+    return Recording(Path(path), info, facts, attachments, inputs, truth)
+
+
+class Replayer(Transport):
+    """The transport of a replay: applies the recorded commands between steps (see the module's docstring).
+
+    Args:
+        inputs: The recorded commands, in the order they were applied.
+        until: Apply none noted at this step or later (None: all).
+    """
+
+    name = "replay"
+
+    def __init__(self, inputs: list[Input], until: int | None = None) -> None:
+        self._inputs = [i for i in inputs if until is None or i.step < until]
+        self._next = 0
+        self._held: list[tuple[ApiEntry, str, Deferred]] = []
+        self._sim: Simulation | None = None
+        self.applied = 0
+
+    def start(self, sim: Simulation) -> None:
+        self._sim = sim
+        sim.add_step_observer(self._poll_held)
+
+    def service(self, timeout: float) -> None:
+        sim = self._sim
+        assert sim is not None
+        inputs = self._inputs
+        while self._next < len(inputs) and inputs[self._next].step <= sim.step_count:
+            item = inputs[self._next]
+            self._next += 1
+            if item.step < sim.step_count:
+                raise ReplayError(f"the command of step {item.step} ({item.kind}) comes after step "
+                                  f"{sim.step_count}: the recording's input log is out of order")
+            result = self._apply(sim, item)
+            if result is not None:
+                self._held.append(result)
+            self.applied += 1
+
+    def stop(self) -> None:
+        if self._sim is not None:
+            self._sim.remove_step_observer(self._poll_held)
+
+    @property
+    def pending(self) -> int:
+        """Commands not applied yet."""
+        return len(self._inputs) - self._next
+
+    def _apply(self, sim: Simulation, item: Input) -> tuple[ApiEntry, str, Deferred] | None:
+        """Apply one command; an API call whose answer is deferred is returned, to be polled after each step."""
+        return sim.inputs.apply(item)
+
+    def _poll_held(self, sim: Simulation) -> None:
+        """Poll deferred answers after each step, as the transport that took the calls did."""
+        if not self._held:
+            return
+        from ..api.call import finish
+
+        self._held = [(entry, agent, d) for entry, agent, d in self._held if finish(sim, entry, agent, d) is None]
+
+
+def poses_now(sim: Simulation) -> dict[str, np.ndarray]:
+    """Every scene frame's pose now, named as in the ground truth (``ground_truth/<entity>`` or
+    ``ground_truth/<robot>/<link>``)."""
+    parts, names = truth_frames(sim)
+    poses = sim.backend.get_poses(parts) if parts else np.empty((0, 7))
+    return dict(zip(names, poses, strict=True))
+
+
+def compare(recorded: dict[str, np.ndarray], now: dict[str, np.ndarray]) -> tuple[bool, float, str]:
+    """``(bitwise equal, largest difference, the frame where it is)`` of two sets of poses; a frame in one set only
+    counts as an infinite difference."""
+    worst, where = 0.0, ""
+    for name in sorted(set(recorded) | set(now)):
+        if name not in recorded or name not in now:
+            return False, float("inf"), name
+        diff = float(np.max(np.abs(recorded[name] - now[name])))
+        if diff > worst or (diff != diff):
+            worst, where = diff, name
+    equal = all(np.array_equal(recorded[n], now[n]) for n in recorded)
+    return equal, worst, where
+
+
+def describe_inputs(inputs: list[Input]) -> dict[str, int]:
+    """How many commands of each kind a recording holds."""
+    out: dict[str, int] = {}
+    for item in inputs:
+        out[item.kind] = out.get(item.kind, 0) + 1
+    return out
