@@ -116,6 +116,11 @@ class Publication:
         return self.qos == "latched"
 
     @property
+    def full_topic(self) -> str:
+        """The topic's full name (an agent's endpoint is declared relative: ``robot_000_onRecvMsg``)."""
+        return self.topic if self.topic.startswith("/") else "/" + self.topic
+
+    @property
     def full_type(self) -> str:
         """The type's full name (``sigcore_msgs/msg/X`` for a bare ``X``)."""
         return self.msg_type if "/" in self.msg_type else f"sigcore_msgs/msg/{self.msg_type}"

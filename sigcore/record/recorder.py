@@ -140,10 +140,10 @@ class Recorder(PublicationSink):
 
     # ------------------------------------------------------------------ PublicationSink
     def declare(self, publication: Publication) -> None:
-        self._topic(_full(publication.topic), publication.full_type, OFFERED[publication.qos], publication.model)
+        self._topic(publication.full_topic, publication.full_type, OFFERED[publication.qos], publication.model)
 
     def publish(self, publication: Publication, stamp_ns: int, value: dict[str, Any]) -> None:
-        name = _full(publication.topic)
+        name = publication.full_topic
         topic = self._topics.get(name) if name in self._topics else self._topic(
             name, publication.full_type, OFFERED[publication.qos], publication.model)
         if topic is None or not self.bag.active:
@@ -165,7 +165,7 @@ class Recorder(PublicationSink):
     def wants(self, publication: Publication) -> bool:
         """Costly values (camera images) are rendered for the recording only when a ``--record-topics`` pattern
         selects their topic."""
-        return bool(self._patterns) and self.selected(_full(publication.topic))
+        return bool(self._patterns) and self.selected(publication.full_topic)
 
     # ------------------------------------------------------------------ the input log
     def _on_input(self, item: Input) -> None:
@@ -266,11 +266,6 @@ def truth_frames(sim: Simulation) -> tuple[list[tuple[str, str | None]], list[st
             parts.append((entity, part))
             names.append(truth_frame(entity, frame, robot))
     return parts, names
-
-
-def _full(topic: str) -> str:
-    """A declared topic's full name (the agents' endpoints are relative: ``robot_000_onRecvMsg``)."""
-    return topic if topic.startswith("/") else "/" + topic
 
 
 class _TfLayout:

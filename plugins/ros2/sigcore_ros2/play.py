@@ -9,7 +9,6 @@ a message ahead of its clock), and at ``--clock-rate`` per second of wall time i
 
 from __future__ import annotations
 
-import importlib
 import re
 import signal
 import time
@@ -19,15 +18,16 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 
+from .publications import message_class
+
 err = Console(stderr=True, highlight=False, markup=False, soft_wrap=True)
 out = Console(highlight=False, markup=False, soft_wrap=True)
 
 
-def message_class(typename: str) -> Any:
+def _class_or_none(typename: str) -> Any:
     """The rclpy class of ``pkg/msg/Name``, or None when its package is not installed."""
-    package, _, name = typename.split("/")
     try:
-        return getattr(importlib.import_module(f"{package}.msg"), name)
+        return message_class(typename)
     except (ImportError, AttributeError):
         return None
 
@@ -90,7 +90,7 @@ def play_command(
     publishers: dict[str, Any] = {}
     skipped: list[str] = []
     for t in chosen:
-        cls = message_class(t.typename)
+        cls = _class_or_none(t.typename)
         if cls is None:
             skipped.append(f"{t.name} ({t.typename}: its package is not installed)")
             continue

@@ -378,15 +378,15 @@ def _read(path: Path, info: BagInfo, facts: dict[str, str], layout: SceneLayout,
     truth_topic = facts.get("ground_truth", TRUTH)
     inputs_topic = facts.get("inputs", INPUTS)
     serializer = Serializer()
-    by_topic = {_full(p.topic): p for p in shown}
+    by_topic = {p.full_topic: p for p in shown}
     for p in shown:
         if p.model is not None:
             serializer.register(p.full_type, p.model)
     recorded = {t.name: t.typename for t in info.topics}
     # the declared publications only, as live (a transport's own scans, recorded too, would be drawn twice)
-    scans = {_full(p.topic): Serialized(p.msg_type) for p in overlays if p.msg_type == _SCAN and _full(p.topic)
+    scans = {p.full_topic: Serialized(p.msg_type) for p in overlays if p.msg_type == _SCAN and p.full_topic
              in recorded}
-    grids = {_full(p.topic): Serialized(p.msg_type) for p in overlays if p.msg_type == _GRID and _full(p.topic)
+    grids = {p.full_topic: Serialized(p.msg_type) for p in overlays if p.msg_type == _GRID and p.full_topic
              in recorded}
     wanted = {truth_topic, inputs_topic, *by_topic, *scans, *grids} & set(recorded)
 
@@ -491,11 +491,6 @@ def _read(path: Path, info: BagInfo, facts: dict[str, str], layout: SceneLayout,
                     np.asarray(times, dtype=np.int64)[sort], pose_array, present_array, lines,
                     {k: v for k, v in scans.items() if v.times}, {k: v for k, v in grids.items() if v.times},
                     start_ns, end_ns, list(info.problems), untracked)
-
-
-def _full(topic: str) -> str:
-    """A declared topic's full name, as recorded (the agents' endpoints are relative)."""
-    return topic if topic.startswith("/") else "/" + topic
 
 
 def _fields(message: Any) -> Any:
