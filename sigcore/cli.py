@@ -691,12 +691,16 @@ def replay(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no progress display")] = False,
 ) -> None:
     """Re-simulate a recorded run from its world and its input log, with no client attached, and compare every
-    body's pose at the end with the recorded ground truth (bit for bit on MuJoCo). --until STEP stops there and
-    hands the paused simulation to live clients, so a failed episode can be inspected where it went wrong."""
+    body's pose at the end with the recorded ground truth (bit for bit on MuJoCo). Every command from outside is
+    applied again (API calls, velocities, resets, entity states, spawns, deletes, entity information); a run that
+    loaded or unloaded a world is refused before it runs. --until STEP stops there and hands the paused simulation
+    to live clients, so a failed episode can be inspected where it went wrong."""
+    from itertools import takewhile
+
     from .record.replay import Replayer, ReplayError, compare, describe_inputs, load_recording, poses_now
     from .sim import Simulation
     from .sim import run as run_sim
-    from .sim.inputs import REPLAYED
+    from .sim.inputs import refusal
 
     try:
         rec = load_recording(path)
@@ -705,14 +709,22 @@ def replay(
         raise _fail([f"sigcore replay: {e}"]) from None
     final = rec.final_step
     target = final if until is None else until
+    load = next((i for i in rec.inputs if i.kind == "world"), None)  # --until counts the first world's steps
+    if until is not None and load is not None and until > load.step:
+        raise _fail([f"sigcore replay: --until {until}: the run's first world ended at step {load.step}, where it "
+                     f"applied '{load.args.get('what') or 'world'}' (world loads are not replayed); --until "
+                     f"{load.step} replays up to it"])
     if target > final:
         raise _fail([f"sigcore replay: --until {until}: the recording ends at step {final} "
                      f"(t = {final * float(rec.facts['timestep']):.3f} s)"])
-    blocked = next((i for i in rec.inputs if i.kind not in REPLAYED and i.step < target), None)
+    # the commands applied before the target, in the log's order (a world load would restart the step count: the
+    # whole run's replay stops at one wherever it is)
+    applied = list(takewhile(lambda i: i.step < target, rec.inputs))
+    blocked = next((why for i in applied if (why := refusal(i)) is not None), None)
+    if blocked is None and until is None:
+        blocked = next((why for i in rec.inputs if i.kind == "world" and (why := refusal(i)) is not None), None)
     if blocked is not None:
-        what = blocked.args.get("what", blocked.kind)
-        raise _fail([f"sigcore replay: step {blocked.step}: the run applied '{what}', which replay does not "
-                     f"reproduce yet (it replays: {', '.join(REPLAYED)}); --until {blocked.step} replays up to it"])
+        raise _fail([f"sigcore replay: {blocked}"])
     handover = _transport(transport) if until is not None else None
     backend = rec.facts.get("backend", "mujoco")
     try:
@@ -741,8 +753,9 @@ def replay(
                          progress=progress, progress_every=5.0)
     finally:
         api_log.setLevel(level)
-    if report.error is not None:
-        raise _fail([f"sigcore replay: the replay stopped at step {sim.step_count}: {report.error}"], 3)
+    error = report.error if report.error is not None else replayer.error
+    if error is not None:
+        raise _fail([f"sigcore replay: the replay stopped at step {sim.step_count}: {error}"], 3)
     out.print(f"  replayed: {report.steps} steps, {replayer.applied} commands applied, wall {report.wall_time:.2f} s")
     recorded = next((poses for step, poses in rec.truth if step == sim.step_count), None)
     differs = False

@@ -8,18 +8,21 @@ its URDFs) are MCAP attachments; facts about the run are an MCAP metadata record
 
 A write that fails (a full disk, a file size limit) stops the recording, never the run: the MCAP file is cut back to
 the last record written whole and closed there (a data end and a footer, no summary section: readers scan it), and
-``metadata.yaml`` counts what the file holds. A recording killed before it ended has no ``metadata.yaml``;
-:func:`bag_info` says so and how many messages are readable.
+``metadata.yaml`` counts what the file holds. The file is written by a process of its own
+(:mod:`sigcore.record._writer`), which closes the recording when the run is killed. A recording whose writer was
+killed before it ended has no ``metadata.yaml``; :func:`bag_info` says so and how many messages are readable.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import logging
-import os
 import shutil
 import struct
+import subprocess
+import sys
 import threading
-import time
 from collections import deque
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
@@ -30,23 +33,21 @@ import yaml
 
 from ..errors import SigcoreError
 from ..publish import Offered
+from . import _writer
+from ._writer import MAGIC
 
 log = logging.getLogger("sigcore.record")
 
 MAX_QUEUED = 20_000
-"""Messages that may wait for the writing thread; beyond, the simulation thread writes them itself."""
+"""Messages that may wait for the sending thread; beyond, the simulation thread sends them itself (and waits for
+the writer when it is behind)."""
 WRITE_PERIOD = 0.05
-"""How often the writing thread writes what is queued [s of wall time]."""
-COMPRESSION = "ZSTD"
-"""How MCAP chunks are compressed (``ZSTD``, ``LZ4`` or ``NONE``; measured: the choice changes the run's speed by
-less than this machine's noise, zstd makes the smallest files)."""
-CHUNK_SIZE = 256 * 1024
-"""Bytes of messages per MCAP chunk (a failure loses at most the chunk being written)."""
+"""How often queued messages go to the writer process [s of wall time]."""
+CLOSE_TIMEOUT = 120.0
+"""How long closing waits for the writer process to finish the file [s]."""
+_PIPE_SIZE = 1 << 20
+"""The pipe to the writer holds this much (Linux's default limit for a user), so the simulation rarely waits."""
 
-_INFINITE = {"sec": 9223372036, "nsec": 854775807}
-"""rosbag2's infinite duration (deadline, lifespan, liveliness lease)."""
-
-MAGIC = b"\x89MCAP0\r\n"
 BAG_FILES = ("metadata.yaml",)
 """Besides ``*.mcap``, what a bag directory holds (``--overwrite`` removes a directory with nothing else)."""
 
@@ -57,40 +58,7 @@ class BagError(SigcoreError, ValueError):
 
 def qos_profiles(offered: Offered) -> list[dict[str, Any]]:
     """rosbag2's ``offered_qos_profiles`` (version 9) of one publisher offering ``offered``."""
-    return [{"history": "keep_last", "depth": offered.depth,
-             "reliability": "reliable" if offered.reliable else "best_effort",
-             "durability": "transient_local" if offered.latched else "volatile",
-             "deadline": dict(_INFINITE), "lifespan": dict(_INFINITE), "liveliness": "automatic",
-             "liveliness_lease_duration": dict(_INFINITE), "avoid_ros_namespace_conventions": False}]
-
-
-class _Stream:
-    """The MCAP file, unbuffered: :attr:`good` is the end of the last write that completed (writes are whole
-    records), where the file is cut if a later write fails."""
-
-    def __init__(self, path: Path) -> None:
-        self.file = open(path, "xb", buffering=0)  # noqa: SIM115 - closed by BagWriter
-        self.pos = 0
-        self.good = 0
-        self.writes = 0
-
-    def write(self, data: bytes | bytearray | memoryview) -> int:
-        view = memoryview(data)
-        while view:
-            n = self.file.write(view)
-            if not n:
-                raise OSError(f"no byte written at offset {self.pos}")
-            self.pos += n
-            view = view[n:]
-        self.good = self.pos
-        self.writes += 1
-        return len(data)
-
-    def tell(self) -> int:
-        return self.pos
-
-    def flush(self) -> None:
-        pass
+    return _writer.qos_profiles(offered.depth, offered.reliable, offered.latched)
 
 
 @dataclass
@@ -107,6 +75,10 @@ class _Topic:
 class BagWriter:
     """Writes one rosbag2 directory (MCAP storage).
 
+    The simulation's thread only queues each message (its topic, log time and bytes). A thread of this process
+    sends what is queued every :data:`WRITE_PERIOD` to a writer process of its own (:mod:`sigcore.record._writer`),
+    which builds and compresses the MCAP chunks on the other core and writes ``metadata.yaml`` at the close.
+
     Args:
         path: The directory to create.
         overwrite: Replace ``path`` if it exists and holds a bag (``metadata.yaml`` and ``.mcap`` files only).
@@ -118,40 +90,46 @@ class BagWriter:
     path: Path
     overwrite: bool = False
     failure: str | None = field(default=None, init=False)
-    """Why the recording stopped early (a write failed), or None."""
+    """Why the recording stopped early (a write failed, the writer process ended), or None."""
     topics: dict[str, _Topic] = field(default_factory=dict, init=False)
 
     def __post_init__(self) -> None:
-        from mcap.writer import CompressionType, Writer
-
         self.path = Path(self.path)
         prepare_directory(self.path, self.overwrite)
         self.file = self.path / f"{self.path.name}_0.mcap"
-        try:
-            self._stream = _Stream(self.file)
-        except OSError as e:
-            raise BagError(f"cannot create {self.file}: {e.strerror or e}") from None
-        self._writer = Writer(self._stream, chunk_size=CHUNK_SIZE,  # type: ignore[arg-type]
-                              compression=getattr(CompressionType, COMPRESSION))  # type: ignore[arg-type]
-        self._schemas: dict[str, int] = {}
-        self._committed: dict[str, int] = {}
-        self._start: int | None = None
-        self._end = 0
         self._closed = False
-        self._guard(lambda: self._writer.start(profile="ros2", library="sigcore"))
-        # messages are queued by the simulation thread and written by a thread of their own, which runs while the
-        # simulation thread is in the physics engine (MuJoCo releases the interpreter there); the lock guards the
-        # MCAP writer and the counts
-        self._queue: deque[tuple[_Topic, int, bytes]] = deque()
-        self._lock = threading.Lock()
+        self._committed: int | None = None
+        self._queue: deque[tuple[int, int, bytes]] = deque()  # appended by the simulation thread, taken by any
+        self._lock = threading.Lock()  # the pipe
         self._done = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="sigcore-recorder", daemon=True)
-        self._thread.start()
+        self._answered = threading.Event()
+        try:
+            self._proc = subprocess.Popen([sys.executable, "-P", _writer.__file__, str(self.path)],
+                                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, start_new_session=True)
+        except OSError as e:
+            raise BagError(f"cannot start the recording's writer process ({sys.executable}): {e.strerror or e}") \
+                from None
+        assert self._proc.stdin is not None and self._proc.stdout is not None
+        self._pipe, answers = self._proc.stdin, self._proc.stdout
+        with contextlib.suppress(OSError):  # a bigger pipe (Linux): the simulation rarely waits for the writer
+            fcntl.fcntl(self._pipe.fileno(), getattr(fcntl, "F_SETPIPE_SZ", 1031), _PIPE_SIZE)
+        first = _writer.read_frame(answers)
+        if first is None or first[0] != "ready":
+            self._proc.wait()
+            why = first[1] if first is not None else f"it ended with exit code {self._proc.returncode}"
+            raise BagError(f"the recording {self.path} cannot be written: {why}")
+        self._listener = threading.Thread(target=self._listen, args=(answers,), name="sigcore-recorder-answers",
+                                          daemon=True)
+        self._listener.start()
+        self._sender = threading.Thread(target=self._run, name="sigcore-recorder", daemon=True)
+        self._sender.start()
 
     # ------------------------------------------------------------------ writing
     @property
     def messages(self) -> int:
-        """Messages written so far (those still queued not counted)."""
+        """Messages handed to the writer so far; after :meth:`close`, the messages the file holds."""
+        if self._committed is not None:
+            return self._committed
         return sum(t.count for t in self.topics.values())
 
     @property
@@ -165,154 +143,115 @@ class BagWriter:
         topic = self.topics.get(name)
         if topic is not None or not self.active:
             return topic
-        writer = self._writer
-
-        def register() -> int:  # under the lock (the writing thread uses the MCAP writer too)
-            schema = self._schemas.get(typename)
-            if schema is None:
-                schema = self._schemas[typename] = writer.register_schema(typename, "ros2msg", definition.encode())
-            qos = yaml.safe_dump(qos_profiles(offered), sort_keys=False).strip()
-            return writer.register_channel(name, "cdr", schema, {"offered_qos_profiles": qos,
-                                                                 "topic_type_hash": digest})
-
-        with self._lock:
-            channel = self._guard(register)
-        if channel is None:
+        topic = _Topic(name, typename, digest, offered, len(self.topics))
+        if not self._send(("topic", topic.channel, name, typename, definition.encode(), digest,
+                           (offered.depth, offered.reliable, offered.latched))):
             return None
-        topic = self.topics[name] = _Topic(name, typename, digest, offered, channel)
+        self.topics[name] = topic
         return topic
 
     def write(self, topic: _Topic, stamp_ns: int, data: bytes) -> None:
-        """Queue one serialized message of ``topic``, logged at ``stamp_ns`` (simulated time); the writing thread
-        writes it (or this call, when :data:`MAX_QUEUED` messages wait: the simulation then waits for the disk)."""
+        """Queue one serialized message of ``topic``, logged at ``stamp_ns`` (simulated time). The sending thread
+        hands it to the writer process (or this call, when :data:`MAX_QUEUED` messages wait)."""
         if self.failure is not None or self._closed:
             return
         queue = self._queue
-        queue.append((topic, stamp_ns, data))
+        queue.append((topic.channel, stamp_ns, data))
+        topic.count += 1
         if len(queue) > MAX_QUEUED:
-            self._drain()
-
-    def _run(self) -> None:
-        """The writing thread: every :data:`WRITE_PERIOD` seconds, write what is queued."""
-        while not self._done.wait(WRITE_PERIOD):
-            if self._queue:
-                self._drain()
-
-    def _drain(self) -> None:
-        """Write every queued message (any thread; one at a time)."""
-        with self._lock:
-            queue, writer, stream = self._queue, self._writer, self._stream
-            while queue and self.failure is None:
-                topic, stamp_ns, data = queue.popleft()
-                before = stream.writes
-                try:
-                    writer.add_message(topic.channel, stamp_ns, data, stamp_ns)
-                except OSError as e:
-                    self._fail(e)
-                    break
-                topic.count += 1
-                if self._start is None or stamp_ns < self._start:
-                    self._start = stamp_ns
-                if stamp_ns > self._end:
-                    self._end = stamp_ns
-                if stream.writes != before:  # a chunk went to the file: every message so far is in it
-                    self._committed = {t.name: t.count for t in self.topics.values()}
-            if self.failure is not None:
-                queue.clear()
+            self._flush()
 
     def attach(self, name: str, media_type: str, data: bytes, stamp_ns: int = 0) -> None:
         """Attach a file (``name``, e.g. ``world/cleanup.xml``) to the recording."""
         if self.active:
-            with self._lock:
-                self._guard(lambda: self._writer.add_attachment(time.time_ns(), stamp_ns, name, media_type, data))
+            self._send(("attach", name, media_type, bytes(data), stamp_ns))
 
     def metadata(self, name: str, values: dict[str, str]) -> None:
         """Add an MCAP metadata record ``name`` of string pairs."""
         if self.active:
-            with self._lock:
-                self._guard(lambda: self._writer.add_metadata(name, values))
+            self._send(("metadata", name, dict(values)))
 
     def close(self, custom: dict[str, str] | None = None) -> None:
-        """Finish the MCAP file (its summary and indexes) and write ``metadata.yaml``; after a failure, close what
-        was written whole (see the module's docstring). Idempotent."""
+        """Hand over what is queued, then have the writer finish the MCAP file (its summary and indexes; after a
+        failure, what was written whole) and write ``metadata.yaml``; wait for it. Idempotent."""
         if self._closed:
             return
         self._done.set()
-        self._thread.join()
-        self._drain()
-        if self.failure is None:
-            try:
-                self._writer.finish()
-                self._committed = {t.name: t.count for t in self.topics.values()}
-            except OSError as e:
-                self._fail(e)
+        self._sender.join()
+        self._flush()
         self._closed = True
+        self._send(("close", dict(custom or {})))
+        with contextlib.suppress(OSError):
+            self._pipe.close()
+        if not self._answered.wait(CLOSE_TIMEOUT):
+            self._proc.kill()
+            self._gone(f"the recording's writer process did not finish {self.file} within {CLOSE_TIMEOUT:.0f} s")
         try:
-            self._stream.file.close()
-        except OSError as e:
-            self._fail(e)
+            self._proc.wait(CLOSE_TIMEOUT)
+        except subprocess.TimeoutExpired:
+            self._proc.kill()
+        self._listener.join(5.0)
+        if self._committed is None:  # the writer ended without saying what it holds
+            self._committed = 0
+
+    # ------------------------------------------------------------------ the writer process
+    def _run(self) -> None:
+        """The sending thread: every :data:`WRITE_PERIOD` seconds, hand what is queued to the writer."""
+        while not self._done.wait(WRITE_PERIOD):
+            if self._queue:
+                self._flush()
+
+    def _flush(self) -> None:
+        """Hand every queued message to the writer process (any thread)."""
+        with self._lock:
+            self._put_queued()
+
+    def _send(self, item: tuple[Any, ...]) -> bool:
+        """Send one operation (after what is queued, which may refer to it); False if the writer has gone."""
+        with self._lock:
+            self._put_queued()
+            return self._put(item)
+
+    def _put_queued(self) -> None:
+        """Send what is queued (under the lock; each ``popleft`` is atomic, so the simulation thread may append
+        meanwhile)."""
+        queue = self._queue
+        batch = [queue.popleft() for _ in range(len(queue))]
+        if batch and self.failure is None:
+            self._put(("messages", batch))
+
+    def _put(self, item: tuple[Any, ...]) -> bool:
+        """Write one operation into the pipe (under the lock)."""
         try:
-            self._write_metadata(custom or {})
-        except OSError as e:
-            self.failure = self.failure or f"cannot write {self.path / 'metadata.yaml'}: {e.strerror or e}"
-            log.error("recording %s: %s", self.path, self.failure)
+            self._pipe.write(_writer.frame(item))
+            self._pipe.flush()
+            return True
+        except (OSError, ValueError):
+            self._gone("the recording's writer process ended unexpectedly "
+                       f"(exit code {self._proc.poll()}); the recording stopped there (the run goes on)")
+            return False
 
-    # ------------------------------------------------------------------ failures
-    def _guard(self, action: Any) -> Any:
-        try:
-            return action()
-        except OSError as e:
-            self._fail(e)
-            return None
+    def _listen(self, answers: Any) -> None:
+        """The writer's answers: a failure as soon as it happens, the counts at the close."""
+        while True:
+            item = _writer.read_frame(answers)
+            if item is None:
+                break
+            if item[0] == "failed" and self.failure is None:
+                self.failure = item[1]
+                log.error("recording: %s", self.failure)
+            elif item[0] == "closed":
+                if item[1] and self.failure is None:
+                    self.failure = item[1]
+                    log.error("recording: %s", self.failure)
+                self._committed = int(item[3])
+                self._answered.set()
+        self._answered.set()
 
-    def _fail(self, error: OSError) -> None:
-        """A write failed: stop recording, cut the file back to its last whole record and close it there."""
-        if self.failure is not None:
-            return
-        what = error.strerror or str(error)
-        self.failure = (f"writing {self.file} failed at byte {self._stream.pos}: {what}; the recording stopped "
-                        f"there (the run goes on) and keeps the {sum(self._committed.values())} messages written "
-                        "before")
-        log.error("recording: %s", self.failure)
-        try:
-            f = self._stream.file
-            f.truncate(self._stream.good)
-            os.lseek(f.fileno(), self._stream.good, os.SEEK_SET)
-            f.write(_data_end_and_footer())
-        except OSError as e:
-            log.error("recording: %s cannot be closed cleanly (%s); bag info still reads what it holds", self.file,
-                      e.strerror or e)
-
-    def _write_metadata(self, custom: dict[str, str]) -> None:
-        """``metadata.yaml`` (rosbag2 version 9) for what the MCAP file holds."""
-        counts = self._committed
-        start = self._start or 0
-        duration = max(0, self._end - start)
-        total = sum(counts.get(t.name, 0) for t in self.topics.values())
-        info = {
-            "version": 9, "storage_identifier": "mcap", "duration": {"nanoseconds": duration},
-            "starting_time": {"nanoseconds_since_epoch": start}, "message_count": total,
-            "topics_with_message_count": [
-                {"topic_metadata": {"name": t.name, "type": t.typename, "serialization_format": "cdr",
-                                    "offered_qos_profiles": qos_profiles(t.offered),
-                                    "type_description_hash": t.digest},
-                 "message_count": counts.get(t.name, 0)} for t in self.topics.values()],
-            "compression_format": "", "compression_mode": "",
-            "relative_file_paths": [self.file.name],
-            "files": [{"path": self.file.name, "starting_time": {"nanoseconds_since_epoch": start},
-                       "duration": {"nanoseconds": duration}, "message_count": total}],
-            "custom_data": custom or None, "ros_distro": "jazzy",
-        }
-        tmp = self.path / "metadata.yaml.tmp"
-        tmp.write_text(yaml.safe_dump({"rosbag2_bagfile_information": info}, sort_keys=False))
-        tmp.replace(self.path / "metadata.yaml")
-
-
-def _data_end_and_footer() -> bytes:
-    """An MCAP data end record, a footer with no summary section, and the closing magic."""
-    data_end = struct.pack("<BQI", 0x0F, 4, 0)
-    footer = struct.pack("<BQQQI", 0x02, 20, 0, 0, 0)
-    return data_end + footer + MAGIC
+    def _gone(self, why: str) -> None:
+        if self.failure is None:
+            self.failure = why
+            log.error("recording %s: %s", self.path, why)
 
 
 def prepare_directory(path: Path, overwrite: bool) -> None:

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import re
 import struct
 from pathlib import Path
@@ -37,6 +38,7 @@ from .. import __version__
 from ..errors import SigcoreError
 from ..publish import OFFERED, Offered, Publication, PublicationSink
 from ..sim.inputs import Input
+from ..world.urdf import resolve_mesh
 from .bag import BagError, BagWriter
 from .serialize import SerializeError, Serializer
 
@@ -54,6 +56,7 @@ INPUTS = "/sigcore/inputs"
 GROUND_TRUTH_RATE = 30.0
 """Default rate of the ground truth [Hz of simulated time]."""
 _TF = "tf2_msgs/msg/TFMessage"
+_MESH_TYPES = {".stl": "model/stl", ".obj": "model/obj", ".dae": "model/vnd.collada+xml"}
 _ROS_ORDER = [0, 1, 2, 4, 5, 6, 3]
 """From a backend's pose (x, y, z, qw, qx, qy, qz) to a transform's (x, y, z, qx, qy, qz, qw)."""
 
@@ -103,9 +106,10 @@ class Recorder(PublicationSink):
         self._dt_ns = round(sim.dt * 1e9)
         self._every = max(1, round(1.0 / (ground_truth_rate * sim.dt))) if ground_truth_rate > 0 else 0
         self._last_truth = -1
-        self._frames: list[tuple[str, str | None]] = []
+        self._frames: tuple[tuple[str, str | None], ...] = ()  # a tuple: the backend keeps its indices
         self._tf: _TfLayout | None = None
         self._scene_version = -1
+        self._scene: Any = None
         self.closed = False
         self._attach_world()
         sim.add_step_observer(self._on_step)
@@ -190,9 +194,11 @@ class Recorder(PublicationSink):
         if step == self._last_truth:
             return
         scene = sim.scene
-        if scene.version != self._scene_version or self._tf is None:
-            self._scene_version = scene.version
-            self._frames, children = truth_frames(sim)
+        if scene.version != self._scene_version or scene is not self._scene or self._tf is None:
+            # a spawn or delete changed the scene, or a world was loaded (a new scene, its version from 0 again)
+            self._scene, self._scene_version = scene, scene.version
+            frames, children = truth_frames(sim)
+            self._frames = tuple(frames)
             self._tf = _TfLayout("world", children)
         topic = self._topic(GROUND_TRUTH, _TF, OFFERED["tf"])
         if topic is None:
@@ -203,28 +209,19 @@ class Recorder(PublicationSink):
 
     # ------------------------------------------------------------------ files
     def _attach_world(self) -> None:
-        """The world file and its URDFs as attachments, the run's facts as metadata."""
+        """The world file, its URDFs and their mesh files as attachments, the run's facts as metadata."""
         sim, bag = self.sim, self.bag
         world = sim.world
-        source = Path(world.source)
-        if source.is_file():
-            bag.attach(f"world/{source.name}", "application/xml", source.read_bytes())
-        seen: set[Path] = set()
-        for agent in world.agents:
-            urdf = getattr(agent, "urdf", None)
-            if urdf is None:
-                continue
-            doc = world.urdf(agent.name)
-            if doc.path in seen:
-                continue
-            seen.add(doc.path)
-            try:
-                rel = doc.path.resolve().relative_to(source.parent.resolve())
-            except ValueError:
-                rel = Path(doc.path.name)
-            bag.attach(f"world/{rel.as_posix()}", "application/xml", doc.text.encode())
-        bag.metadata("sigcore", {"version": __version__, "world": world.name, "world_file": str(source.resolve()),
-                                 "world_attachment": f"world/{source.name}", "backend": sim.backend.name,
+        files = world_files(world)
+        source = Path(world.source).resolve()
+        # each file under the folder that holds them all, at its place: the world file's relative paths
+        # (``../models/x.urdf``) then name the same files when a replay writes them out elsewhere
+        base = Path(os.path.commonpath([str(f.parent) for f in files])) if files else source.parent
+        for file, media in files.items():
+            bag.attach(f"world/{file.relative_to(base).as_posix()}", media, file.read_bytes())
+        rel = source.relative_to(base).as_posix() if source in files else source.name
+        bag.metadata("sigcore", {"version": __version__, "world": world.name, "world_file": str(source),
+                                 "world_attachment": f"world/{rel}", "backend": sim.backend.name,
                                  "timestep": repr(sim.dt), "start_step": str(sim.step_count),
                                  "controllers": json.dumps(sim.controller_overrides),
                                  "ground_truth": GROUND_TRUTH, "inputs": INPUTS})
@@ -248,6 +245,30 @@ class Recorder(PublicationSink):
     def messages(self) -> int:
         """Messages written so far."""
         return self.bag.messages
+
+
+def world_files(world: Any) -> dict[Path, str]:
+    """Every file a world is made of, resolved, with its media type: the world file, the URDFs its agents use, and
+    the mesh files of its objects and of those URDFs (those that exist)."""
+    files: dict[Path, str] = {}
+
+    def add(path: Path | None, media: str) -> None:
+        if path is not None and path.is_file():
+            files.setdefault(path.resolve(), media)
+
+    add(Path(world.source), "application/xml")
+    for agent in world.agents:
+        mesh = getattr(agent, "mesh", None)
+        if mesh is not None:
+            add(world.resolve(mesh), _MESH_TYPES.get(Path(mesh).suffix.lower(), "application/octet-stream"))
+        if getattr(agent, "urdf", None) is None:
+            continue
+        doc = world.urdf(agent.name)
+        add(doc.path, "application/xml")
+        for element in doc.root.iter("mesh"):
+            path = resolve_mesh(str(element.get("filename", "")), doc.path.parent)
+            add(path, _MESH_TYPES.get(path.suffix.lower(), "application/octet-stream") if path else "")
+    return files
 
 
 def truth_frame(entity: str, frame: str, robot: bool) -> str:
@@ -303,13 +324,16 @@ class _TfLayout:
         self._u32 = np.frombuffer(buf, dtype="<u4", offset=4)
         self._f64 = np.frombuffer(buf, dtype="<f8", offset=4)
         self._sec = (np.array(self._stamps, dtype=np.int64) - 4) // 4
-        self._words = ((np.array(self._values, dtype=np.int64) - 4) // 8)[:, None] + np.arange(7)
+        self._nanosec = self._sec + 1
+        self._words = (((np.array(self._values, dtype=np.int64) - 4) // 8)[:, None] + np.arange(7)).ravel()
+        # from a row-major (n, 7) array of backend poses to the transforms' numbers, in one flat indexing
+        self._source = (np.arange(len(children))[:, None] * 7 + np.array(_ROS_ORDER)).ravel()
 
     def pack(self, stamp_ns: int, poses: Any) -> bytes:
         """The message stamped ``stamp_ns`` with ``poses`` ((n, 7): x, y, z, qw, qx, qy, qz per child)."""
         if self._n:
             sec, nanosec = divmod(stamp_ns, 1_000_000_000)
             self._u32[self._sec] = sec
-            self._u32[self._sec + 1] = nanosec
-            self._f64[self._words] = np.asarray(poses, dtype="<f8")[:, _ROS_ORDER]
-        return bytes(self._buf[:self._length])
+            self._u32[self._nanosec] = nanosec
+            self._f64[self._words] = np.asarray(poses, dtype="<f8").ravel()[self._source]
+        return bytes(memoryview(self._buf)[:self._length])

@@ -5,9 +5,10 @@ The recording holds the world file (an attachment; the original file is used whe
 the backend, the controllers given on the command line, the step the run started at and ended at, and every command
 applied from outside with the step it took effect (``/sigcore/inputs``, :mod:`sigcore.sim.inputs`). A
 :class:`Replayer` is the run's only transport: serviced between steps like the ROS 2 transport was, it applies the
-commands of each step through the same core paths (an API call, a drive's velocity, a reset), and polls deferred
-answers after each step as the ROS 2 transport did. MuJoCo is deterministic: the ground truth of the last step is
-reproduced bit for bit. ``--until STEP`` stops at a step and hands the simulation, paused, to live clients.
+commands of each step through the same core paths (an API call, a drive's velocity, a reset, a spawn, a delete, an
+entity's information), and polls deferred answers after each step as the ROS 2 transport did. MuJoCo is
+deterministic: the ground truth of the last step is reproduced bit for bit. ``--until STEP`` stops at a step and
+hands the simulation, paused, to live clients.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import json
 import logging
 import tempfile
 from dataclasses import dataclass, field
+from itertools import takewhile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -83,7 +85,10 @@ class Recording:
                 return parse_world(original)
             folder = Path(workdir or tempfile.mkdtemp(prefix="sigcore_replay_"))
             for rel, data in self.attachments.items():
-                target = folder / rel
+                target = (folder / rel).resolve()
+                if folder.resolve() not in target.parents:
+                    raise ReplayError(f"{self.path}: attachment {rel!r} would be written outside {folder}; a "
+                                      "recording's files are named under world/, without '..'")
                 target.parent.mkdir(parents=True, exist_ok=True)
                 target.write_bytes(data)
             return parse_world(folder / name)
@@ -116,7 +121,9 @@ def load_recording(path: Path) -> Recording:
     truth: list[tuple[int, dict[str, np.ndarray]]] = []
     for file in info.files:
         with open(file, "rb") as f:
-            for _, channel, message in make_reader(f).iter_messages(topics=[INPUTS, GROUND_TRUTH]):
+            # in the order written (the order the commands were applied), not sorted by log time
+            for _, channel, message in make_reader(f).iter_messages(topics=[INPUTS, GROUND_TRUTH],
+                                                                    log_time_order=False):
                 if channel.topic == INPUTS:
                     text = serializer.deserialize("std_msgs/msg/String", message.data).data
                     inputs.append(Input.from_json(json.loads(text)))
@@ -135,17 +142,21 @@ class Replayer(Transport):
 
     Args:
         inputs: The recorded commands, in the order they were applied.
-        until: Apply none noted at this step or later (None: all).
+        until: Apply the commands up to the first noted at this step or later (None: all); the log's order is
+            kept (a world loaded during the run restarts the step count: what follows it is not applied then).
     """
 
     name = "replay"
 
     def __init__(self, inputs: list[Input], until: int | None = None) -> None:
-        self._inputs = [i for i in inputs if until is None or i.step < until]
+        self._inputs = list(takewhile(lambda i: until is None or i.step < until, inputs))
         self._next = 0
         self._held: list[tuple[ApiEntry, str, Deferred]] = []
         self._sim: Simulation | None = None
         self.applied = 0
+        self.error: str | None = None
+        """Why the replay stopped early: a command that cannot be applied again (:class:`ReplayError`); the run
+        then ends before the next step (``stop_reason`` ``"replay error"``)."""
 
     def start(self, sim: Simulation) -> None:
         self._sim = sim
@@ -155,13 +166,19 @@ class Replayer(Transport):
         sim = self._sim
         assert sim is not None
         inputs = self._inputs
-        while self._next < len(inputs) and inputs[self._next].step <= sim.step_count:
+        while self.error is None and self._next < len(inputs) and inputs[self._next].step <= sim.step_count:
             item = inputs[self._next]
             self._next += 1
-            if item.step < sim.step_count:
-                raise ReplayError(f"the command of step {item.step} ({item.kind}) comes after step "
-                                  f"{sim.step_count}: the recording's input log is out of order")
-            result = self._apply(sim, item)
+            try:
+                if item.step < sim.step_count:
+                    raise ReplayError(f"the command of step {item.step} ({item.kind}) comes after step "
+                                      f"{sim.step_count}: the recording's input log is out of order")
+                result = self._apply(sim, item)
+            except ReplayError as e:  # the run ends before the next step, saying why (not a traceback)
+                self.error = str(e)
+                sim.control.paused = True
+                sim.control.request_stop("replay error")
+                return
             if result is not None:
                 self._held.append(result)
             self.applied += 1

@@ -17,14 +17,26 @@ Kinds (``Input.kind``) and their arguments:
 - ``reset``: :meth:`Simulation.reset`: ``despawn``;
 - ``entity_state``: simulation_interfaces' ``set_entity_state``: ``entity``, ``position``, ``quaternion`` (w, x, y,
   z), ``linear``, ``angular`` (None: not set);
-- ``spawn``, ``delete``, ``world``, ``entity_info``: noted (``what`` says what) but not replayed yet: a replay of a
-  recording that holds one stops before it, saying so.
+- ``spawn``: simulation_interfaces' ``spawn_entity`` / ``spawn_entities``, one input per call (a batch stays one
+  batch, so renaming and order are the same): ``requests`` (every :class:`~sigcore.sim.spawn.SpawnRequest` passed
+  to :meth:`Simulation.spawn`, in order, as a dict of its fields, tuples as lists), ``names`` (per request the name
+  it got, or None when it was refused: a replay checks that it gets the same), ``what``; noted by
+  :meth:`Inputs.note_spawn` after the call, refusals included;
+- ``delete``: ``delete_entity`` that succeeded: ``entities`` (names), ``what``;
+- ``entity_info``: ``set_entity_info`` that succeeded: ``entity``, ``category`` (the core's name, e.g.
+  ``static_object``), ``description``, ``tags``, ``what``;
+- ``world``: ``load_world`` (``uri``, ``resource_string`` as given) and ``unload_world``, with ``what``: noted but not
+  replayed: a replay of a recording that holds one stops before it, saying so (a world load restarts the step count
+  and the recording's clock).
+
+A ``spawn``, ``delete`` or ``entity_info`` recorded before they were replayed holds only ``what``: it is refused the
+same way (:func:`refusal`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
 from ..errors import SigcoreError
@@ -33,13 +45,19 @@ if TYPE_CHECKING:
     from ..api.deferred import Deferred
     from ..api.table import ApiEntry
     from .simulation import Simulation
+    from .spawn import SpawnRefusal, SpawnRequest
 
-REPLAYED = ("api", "base_velocity", "wheel_velocity", "message", "reset", "entity_state")
+REPLAYED = ("api", "base_velocity", "wheel_velocity", "message", "reset", "entity_state", "spawn", "delete",
+            "entity_info")
 """The kinds :meth:`Inputs.apply` reproduces."""
+
+_NEEDED = {"spawn": "requests", "delete": "entities", "entity_info": "category"}
+"""Kinds noted with only ``what`` by older sigcores: the argument the full form has."""
 
 
 class ReplayError(SigcoreError, ValueError):
-    """An input cannot be applied again (an unknown kind or entry, a kind not replayed yet)."""
+    """An input cannot be applied again (an unknown kind or entry, a kind not replayed yet, one recorded without its
+    arguments, a spawn, delete or entity information change that does not give what it gave when recorded)."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +75,38 @@ class Input:
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> Input:
         return cls(int(data["step"]), str(data["kind"]), dict(data.get("args") or {}))
+
+
+def refusal(item: Input) -> str | None:
+    """Why ``item`` cannot be applied again (naming its step and offering ``--until``), or None when it can: a kind
+    not replayed (``world``, an unknown one), or one recorded with only ``what`` (before sigcore replayed it)."""
+    what = item.args.get("what") or item.kind
+    if item.kind not in REPLAYED:
+        return (f"step {item.step}: the run applied '{what}', which replay does not reproduce yet (it replays: "
+                f"{', '.join(REPLAYED)}); --until {item.step} replays up to it")
+    needed = _NEEDED.get(item.kind)
+    if needed is not None and needed not in item.args:
+        return (f"step {item.step}: the run applied '{what}', recorded without its arguments (by a sigcore that "
+                f"did not replay '{item.kind}' yet): it cannot be applied again; --until {item.step} replays up to it")
+    return None
+
+
+def spawn_request_args(request: SpawnRequest) -> dict[str, Any]:
+    """Every field of ``request`` (tuples as lists): a ``spawn`` input's ``requests`` item."""
+    return {f.name: list(value) if isinstance(value := getattr(request, f.name), tuple) else value
+            for f in fields(request)}
+
+
+def spawn_request_of(args: dict[str, Any]) -> SpawnRequest:
+    """The request :func:`spawn_request_args` gave ``args`` for."""
+    from .spawn import SpawnRequest
+
+    known = {f.name for f in fields(SpawnRequest)}
+    unknown = sorted(set(args) - known)
+    if unknown:
+        raise ReplayError(f"a spawn request with fields this sigcore does not know: {', '.join(unknown)}")
+    values: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in args.items()}
+    return SpawnRequest(**values)
 
 
 class Inputs:
@@ -80,13 +130,23 @@ class Inputs:
         for listener in list(self.listeners):
             listener(item)
 
+    def note_spawn(self, requests: Sequence[SpawnRequest], outcomes: Sequence[str | SpawnRefusal],
+                   what: str = "") -> None:
+        """``requests`` were just passed to :meth:`Simulation.spawn` (one call) and gave ``outcomes`` (a name, or
+        the refusal): one ``spawn`` input."""
+        if self.listeners:
+            self.note("spawn", requests=[spawn_request_args(r) for r in requests],
+                      names=[o if isinstance(o, str) else None for o in outcomes], what=what)
+
     def apply(self, item: Input) -> tuple[ApiEntry, str, Deferred] | None:
         """Apply ``item`` again (a replay), exactly as it was applied: through the same core paths. An API call whose
         answer is deferred returns ``(entry, agent, deferred)``: the caller polls it after each step
         (:func:`sigcore.api.call.finish`), as the transport that took the call did.
 
         Raises:
-            ReplayError: a kind that is not replayed (yet), or an entry the agent does not have.
+            ReplayError: a kind that is not replayed (yet) or was recorded without its arguments, an entry the agent
+                does not have, a spawn that does not get what it got when recorded (a file it names is gone), a
+                delete or an entity information change refused now.
         """
         sim, a = self._sim, item.args
         if item.kind == "api":
@@ -114,8 +174,47 @@ class Inputs:
             if a.get("linear") is not None:
                 handle.set_velocity(tuple(a["linear"]))
                 handle.set_angular_velocity(tuple(a["angular"]))
-        else:
-            what = a.get("what", "")
-            raise ReplayError(f"step {item.step}: a {item.kind}{f' ({what})' if what else ''} was applied here, "
-                              f"which sigcore replay does not reproduce yet (it replays: {', '.join(REPLAYED)})")
+        elif (why := refusal(item)) is not None:
+            raise ReplayError(why)
+        elif item.kind == "spawn":
+            self._spawn(item)
+        elif item.kind == "delete":
+            from .spawn import SpawnRefusal
+
+            try:
+                sim.delete(list(a["entities"]))
+            except SpawnRefusal as e:
+                raise ReplayError(f"step {item.step}: deleting {', '.join(map(repr, a['entities']))} is refused "
+                                  f"now ({e.code}: {e}), it was done when recorded") from None
+        elif item.kind == "entity_info":
+            from ..agent.exceptions import ApiError
+
+            try:
+                sim.info.set(a["entity"], a["category"], a["description"], list(a["tags"]))
+            except ApiError as e:
+                raise ReplayError(f"step {item.step}: set_entity_info of {a['entity']!r} is refused now ({e}), it "
+                                  "was done when recorded") from None
         return None
+
+    def _spawn(self, item: Input) -> None:
+        """A ``spawn`` again: the same requests in one call; each must get what it got when recorded."""
+        try:
+            requests = [spawn_request_of(r) for r in item.args["requests"]]
+        except ReplayError as e:
+            raise ReplayError(f"step {item.step}: {e}") from None
+        outcomes = self._sim.spawn(requests)
+        names = item.args.get("names")
+        if names is None:
+            return
+        for request, outcome, recorded in zip(requests, outcomes, names, strict=True):
+            now = outcome if isinstance(outcome, str) else None
+            if now == recorded:
+                continue
+            source = f"uri {request.uri!r}" if request.uri.strip() else "its resource text"
+            what = f"step {item.step}: the spawn of {source}" + (f" (name {request.name!r})" if request.name else "")
+            if not isinstance(outcome, str):
+                raise ReplayError(f"{what} is refused now ({outcome.code}: {outcome}); when recorded it spawned "
+                                  f"'{recorded}' (the files a spawn names must still be there to replay it)")
+            if recorded is None:
+                raise ReplayError(f"{what} spawned '{now}' now, but was refused when recorded")
+            raise ReplayError(f"{what} spawned '{now}' now, '{recorded}' when recorded")

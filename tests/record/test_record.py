@@ -25,6 +25,8 @@ from sigcore.record.bag import bag_info
 from sigcore.record.recorder import _TfLayout
 from sigcore.record.serialize import SerializeError, Serializer
 from sigcore.sim import Simulation, run
+from sigcore.sim.inputs import Input, ReplayError, refusal
+from sigcore.sim.spawn import SpawnRefusal, SpawnRequest
 from sigcore.world import parse_world
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -347,26 +349,173 @@ def test_a_replay_applies_each_command_at_its_step_bit_for_bit(tmp_path: Path) -
     assert not equal and worst > 1e-3, (worst, where)
 
 
+def _spawn_and_record(path: Path, pebble: Path) -> None:
+    """tests/data/sim/world.xml recorded for 1000 steps while this test applies and notes what the ROS 2 plugin
+    applies and notes for spawn_entities, delete_entity and set_entity_info: at step 100 one batch of three
+    requests (a box from its resource text dropped on the ball, the file ``pebble`` as 'crate' renamed to 'crate_1'
+    dropped on the cube, a missing file, refused), at step 400 the cube deleted (the pebble falls), at step 500 the
+    heavy box's information changed."""
+    sim = Simulation(parse_world(WORLD), "mujoco")
+    recorder = Recorder(sim, path)
+    sim.start()
+    for step in range(1000):
+        if step == 100:
+            requests = [SpawnRequest(name="crate", resource='<object shape="box" size="0.1 0.1 0.1" mass="1"/>',
+                                     xyz=(-0.96, 1.0, 0.3), wxyz=(0.9659258, 0.0, 0.0, 0.2588190), tags=("trash",)),
+                        SpawnRequest(name="crate", uri=str(pebble), xyz=(0.6, 0.5, 0.3), allow_renaming=True),
+                        SpawnRequest(uri="missing.urdf")]
+            outcomes = sim.spawn(requests)
+            assert outcomes[:2] == ["crate", "crate_1"] and isinstance(outcomes[2], SpawnRefusal), outcomes
+            sim.inputs.note_spawn(requests, outcomes, what="spawn_entities (3)")  # as siminterfaces notes it
+        if step == 400:
+            sim.delete(["cube"])
+            sim.inputs.note("delete", entities=["cube"], what="delete_entity cube")
+        if step == 500:
+            info = sim.info.set("heavy", "dynamic_object", "pushed around", ["furniture", "moved"])
+            sim.inputs.note("entity_info", entity="heavy", category=info.category, description=info.description,
+                            tags=list(info.tags), what="set_entity_info heavy")
+        sim.step()
+    sim.stop()
+    recorder.close()
+
+
+def test_a_replay_reproduces_spawns_deletes_and_entity_info(tmp_path: Path) -> None:
+    """A run with a spawn batch (renaming and a refusal in it), a delete and an entity information change: the log
+    holds every request's fields and outcome; a Replayer reproduces every frame's pose bit for bit and the
+    information; without the spawn the ball is not knocked away and without the delete the pebble stays up (the
+    comparison fails); with the pebble's file gone the replay stops at the spawn naming the step, the uri and the
+    core's refusal."""
+    from sigcore.record.replay import Replayer, compare, load_recording, poses_now
+
+    pebble = tmp_path / "pebble.xml"
+    pebble.write_text('<object shape="sphere" size="0.03" mass="0.1"/>\n')
+    _spawn_and_record(tmp_path / "bag", pebble)
+    rec = load_recording(tmp_path / "bag")
+    assert [(i.step, i.kind) for i in rec.inputs] == [(100, "spawn"), (400, "delete"), (500, "entity_info")]
+    spawn = rec.inputs[0].args
+    assert spawn["requests"][0] == {"name": "crate", "uri": "", "resource": '<object shape="box" size="0.1 0.1 0.1" '
+                                    'mass="1"/>', "xyz": [-0.96, 1.0, 0.3], "wxyz": [0.9659258, 0.0, 0.0, 0.2588190],
+                                    "frame": "", "namespace": "", "allow_renaming": False, "tags": ["trash"]}
+    assert [r["uri"] for r in spawn["requests"]] == ["", str(pebble), "missing.urdf"]
+    assert spawn["names"] == ["crate", "crate_1", None]
+    assert rec.inputs[1].args["entities"] == ["cube"]
+    assert rec.inputs[2].args == {"entity": "heavy", "category": "dynamic_object", "description": "pushed around",
+                                  "tags": ["furniture", "moved"], "what": "set_entity_info heavy"}
+    recorded = rec.truth[-1][1]
+    assert rec.final_step == 1000 and "ground_truth/crate_1" in recorded and "ground_truth/cube" not in recorded
+
+    def replay(inputs: list) -> tuple[Simulation, Replayer]:
+        sim = Simulation(rec.world(tmp_path / "world"), "mujoco", rec.controllers)
+        replayer = Replayer(inputs)
+        run(sim, steps=rec.final_step, transport=[replayer])
+        return sim, replayer
+
+    sim, replayer = replay(rec.inputs)
+    equal, worst, _ = compare(recorded, poses_now(sim))
+    assert replayer.error is None and replayer.applied == 3 and equal and worst == 0.0
+    assert sim.info.get("heavy").category == "dynamic_object" and sim.info.get("heavy").tags == ("furniture", "moved")
+    assert sim.info.get("crate").tags == ("trash",)
+
+    sim, _ = replay([i for i in rec.inputs if i.kind != "spawn"])
+    now = poses_now(sim)
+    assert not compare(recorded, now)[0]
+    assert np.linalg.norm(recorded["ground_truth/ball"][:3] - now["ground_truth/ball"][:3]) > 0.5  # knocked away
+    sim, _ = replay([i for i in rec.inputs if i.kind != "delete"])
+    now = poses_now(sim)
+    assert not compare(recorded, now)[0] and now["ground_truth/crate_1"][2] - recorded["ground_truth/crate_1"][2] > 0.04
+
+    pebble.unlink()
+    sim, replayer = replay(rec.inputs)
+    assert sim.step_count == 100 and replayer.applied == 0 and replayer.error is not None
+    assert replayer.error.startswith(f"step 100: the spawn of uri '{pebble}' (name 'crate') is refused now "
+                                     f"(NOT_FOUND: no file for uri '{pebble}'"), replayer.error
+
+
+def test_replay_refuses_commands_recorded_without_their_arguments() -> None:
+    """A spawn, delete or entity_info input as sigcore noted them before they were replayed (only ``what``) and a
+    world load are refused, naming the step and offering --until; the full forms are replayable."""
+    sim = Simulation(parse_world(WORLD), "mujoco")
+    for kind, what in [("spawn", "spawn_entity crate"), ("delete", "delete_entity cube"),
+                       ("entity_info", "set_entity_info cube"), ("world", "load_world other")]:
+        item = Input(7, kind, {"what": what})
+        why = refusal(item)
+        assert why is not None and why.startswith(f"step 7: the run applied '{what}'") and "--until 7" in why
+        with pytest.raises(ReplayError, match=f"step 7: the run applied '{what}'"):
+            sim.inputs.apply(item)
+    assert refusal(Input(7, "delete", {"entities": ["cube"]})) is None
+    sim.inputs.apply(Input(7, "delete", {"entities": ["cube"]}))
+    assert "cube" not in sim.entity_names
+    with pytest.raises(ReplayError, match="step 7: deleting 'cube' is refused now .NOT_FOUND"):
+        sim.inputs.apply(Input(7, "delete", {"entities": ["cube"]}))
+
+
+def test_a_world_load_is_recorded_in_log_order_and_not_replayed(tmp_path: Path) -> None:
+    """A world loaded while recording (noted as the ROS 2 plugin notes load_world) restarts the step count: the
+    recording goes on with the new world's frames (no stale frames of the old one), the input log is read back in
+    the order applied (a command of the new world's step 20 after the load at step 300), a replay up to step 100
+    applies only the old world's commands, and the load is refused naming its step."""
+    from sigcore.record.replay import Replayer, load_recording
+
+    sim = Simulation(parse_world(WORLD), "mujoco")
+    recorder = Recorder(sim, tmp_path / "bag", ground_truth_rate=100)
+    sim.step(50)
+    sim.delete(["cube"])
+    sim.inputs.note("delete", entities=["cube"], what="delete_entity cube")
+    sim.step(250)
+    camera = ROOT / "tests" / "data" / "sim" / "camera.xml"
+    sim.inputs.note("world", what="load_world camera", uri=str(camera), resource_string="")
+    sim.load_world(parse_world(camera))
+    sim.step(20)
+    info = sim.info.set("can", "dynamic_object", "", [])
+    sim.inputs.note("entity_info", entity="can", category=info.category, description="", tags=[])
+    sim.step(80)
+    recorder.close()
+    rec = load_recording(tmp_path / "bag")
+    assert [(i.step, i.kind) for i in rec.inputs] == [(50, "delete"), (300, "world"), (20, "entity_info")]
+    assert rec.final_step == 100 and "ground_truth/can" in rec.truth[-1][1]
+    assert "ground_truth/ball" not in rec.truth[-1][1] and "ground_truth/ball" in rec.truth[0][1]
+    assert Replayer(rec.inputs, until=100).pending == 1 and Replayer(rec.inputs).pending == 3
+    why = refusal(rec.inputs[1])
+    assert why is not None and why.startswith("step 300: the run applied 'load_world camera', which replay does not "
+                                              "reproduce yet") and "--until 300" in why
+
+
 def test_replay_cli_checks_and_refuses_what_it_cannot_reproduce(tmp_path: Path) -> None:
     """sigcore replay of that recording: exit 0, 'bitwise equal', the commands counted; a recording whose input
-    log holds a spawn (noted as the ROS 2 transport notes one) is refused before it runs, naming the step and
-    offering --until; --until before it replays up to there."""
+    log holds a spawn noted as sigcore noted one before spawns were replayed (only 'what'), or a world load, is
+    refused before it runs, naming the step and offering --until; --until before it replays up to there, --until
+    after a world load is refused; a spawn whose file is gone stops the replay there (exit 3) naming the step, the
+    uri and the refusal, no traceback."""
     _drive_and_record(tmp_path / "bag")
     out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "bag")], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stdout + out.stderr
     assert "6 commands applied" in out.stdout and "ground truth at step 1500:" in out.stdout
     assert "bitwise equal" in out.stdout
 
-    sim = Simulation(parse_world(WORLD), "mujoco")
-    recorder = Recorder(sim, tmp_path / "spawned")
-    sim.step(100)
-    sim.inputs.note("spawn", what="spawn_entity crate")  # what siminterfaces notes when a client spawns
-    sim.step(100)
-    recorder.close()
-    out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "spawned")], capture_output=True, text=True,
-                         timeout=120)
-    assert out.returncode == 2 and "step 100: the run applied 'spawn_entity crate'" in out.stderr
-    assert "--until 100" in out.stderr
-    out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "spawned"), "--until", "85", "--transport", "none"],
+    for name, kind, what in [("spawned", "spawn", "spawn_entity crate"), ("world", "world", "load_world other")]:
+        sim = Simulation(parse_world(WORLD), "mujoco")
+        recorder = Recorder(sim, tmp_path / name)
+        sim.step(100)
+        sim.inputs.note(kind, what=what)  # what siminterfaces / worlds noted when a client spawned / loaded a world
+        sim.step(100)
+        recorder.close()
+        out = subprocess.run([*SIGCORE, "replay", str(tmp_path / name)], capture_output=True, text=True,
+                             timeout=120)
+        assert out.returncode == 2 and f"step 100: the run applied '{what}'" in out.stderr, out.stderr
+        assert "--until 100" in out.stderr
+    out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "world"), "--until", "85", "--transport", "none"],
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0 and "ground truth at step 85:" in out.stdout and "bitwise equal" in out.stdout
+    out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "world"), "--until", "150", "--transport", "none"],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and "the run's first world ended at step 100" in out.stderr, out.stderr
+
+    pebble = tmp_path / "pebble.xml"
+    pebble.write_text('<object shape="sphere" size="0.03" mass="0.1"/>\n')
+    _spawn_and_record(tmp_path / "pebble", pebble)
+    pebble.unlink()
+    out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "pebble"), "-q"], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 3 and "Traceback" not in out.stderr, out.stdout + out.stderr
+    assert (f"the replay stopped at step 100: step 100: the spawn of uri '{pebble}' (name 'crate') is refused now "
+            f"(NOT_FOUND: no file for uri '{pebble}'") in " ".join(out.stderr.split()), out.stderr

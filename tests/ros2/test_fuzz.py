@@ -20,8 +20,9 @@ from test_transport import expected_endpoints  # noqa: E402
 from sigcore.api import api_table  # noqa: E402
 
 SEED = 17
-REQUESTS = 2000
-"""Requests of the campaign (service calls and published messages) [requests]."""
+REQUESTS = 1200
+"""Requests of the campaign (service calls and published messages) [requests]: every endpoint first, then random ones
+(seeded: the same campaign every run; 2000 took about 40 s, 1200 about 25 s)."""
 
 LOG_LIMIT = 200_000
 """The simulation's whole log after the campaign stays under this [bytes]."""
@@ -36,7 +37,7 @@ BUILTIN = ("describe_parameters", "get_parameters", "get_parameter_types", "list
 
 
 def test_fuzz_campaign_every_endpoint_answers_and_the_log_stays_small(tmp_path: Path) -> None:
-    """2000 seeded hostile requests on every service and topic: every call is answered within 10 s, no traceback
+    """1200 seeded hostile requests on every service and topic: every call is answered within 10 s, no traceback
     is logged, the log stays under 200 kB, and afterwards parameters, reset, positions, time and stepping are
     right."""
     topics, services = expected_endpoints()

@@ -59,8 +59,10 @@ def _ns(stamp: Any) -> int:
 
 
 def test_the_run_stepped_and_the_recording_completed(recorded: dict) -> None:
-    """Every step_simulation call succeeded; the run's report names the complete recording."""
+    """Every step_simulation call succeeded, and the reset, the spawn, the delete and set_entity_info; the run's
+    report names the complete recording."""
     assert recorded["seen"]["results"] == [1] * 10 and recorded["seen"]["resets"] == [1]
+    assert recorded["seen"]["changes"] == {"spawn": [1, "crate"], "delete": 1, "info": 1}
     assert "recording:" in recorded["log"] and "complete" in recorded["log"], recorded["log"][-2000:]
 
 
@@ -77,14 +79,16 @@ def test_the_transports_topics_are_recorded(recorded: dict) -> None:
 
 def test_what_the_client_received_is_what_the_bag_holds(recorded: dict) -> None:
     """The joint states the client received over DDS are exactly the bag's, in order (all 500 steps' worth at
-    the state rate: 50 Hz = every 10 steps, plus the one after the reset), each logged at its stamp; the bag also
-    has the one of t = 0, published before the client subscribed; so are the /tf messages' stamps."""
+    the state rate: 50 Hz = every 10 steps, plus one after the reset, the spawn and the delete), each logged at its
+    stamp; the bag also has the one of t = 0, published before the client subscribed; so are the /tf messages'
+    stamps."""
     joints = [(t, m) for topic, t, m in recorded["messages"] if topic == "/bot/joint_states"]
     assert all(t == _ns(m.header.stamp) for t, m in joints)
     bag = [t for t, _ in joints]
     got = recorded["seen"]["joints"]
-    # every 10 steps from 10 to 500, and once more at the reset (after step 300: the state is published again)
-    assert got == sorted([i * 10 * STEP_NS for i in range(1, 51)] + [300 * STEP_NS])
+    # every 10 steps from 10 to 500, and once more at the reset, the spawn and the delete (after steps 300, 350 and
+    # 400: the state is published again when the entities change)
+    assert got == sorted([i * 10 * STEP_NS for i in range(1, 51)] + [300 * STEP_NS, 350 * STEP_NS, 400 * STEP_NS])
     assert bag == [0, *got]  # the one at t = 0 was published at the start, before the client subscribed
     tf = [[_ns(x.header.stamp) for x in m.transforms][:1] for topic, _, m in recorded["messages"] if topic == "/tf"]
     seen = recorded["seen"]["tf"]
@@ -101,13 +105,33 @@ def test_clock_is_recorded_in_order_at_simulated_times(recorded: dict) -> None:
 
 def test_the_input_log_holds_the_clients_commands(recorded: dict) -> None:
     """/sigcore/inputs holds what the client did, at the steps it took effect: the first cmd_vel at step 0 (the
-    simulation was paused there), the second at step 150, the joint command at 200, the reset at 300."""
+    simulation was paused there), the second at step 150, the joint command at 200, the reset at 300, the spawn at
+    350, the delete and set_entity_info at 400, each with every argument a replay needs."""
     import json
 
     inputs = [json.loads(raw[8:-1].decode()) for topic, _, raw in recorded["messages"] if topic == "/sigcore/inputs"]
     kinds = [(i["step"], i["kind"]) for i in inputs if i["kind"] != "api" or i["args"]["entry"] == "_setJointTarget"]
     assert kinds[:4] == [(0, "base_velocity"), (150, "base_velocity"), (200, "api"), (300, "reset")]
+    assert [k for k in kinds if k[1] in ("spawn", "delete", "entity_info")] == [(350, "spawn"), (400, "delete"),
+                                                                                (400, "entity_info")]
     assert inputs[0]["args"] == {"robot": "bot", "linear": 0.4, "angular": 0.6}
+    spawn, delete, info = [i["args"] for i in inputs if i["kind"] in ("spawn", "delete", "entity_info")]
+    assert spawn == {"requests": [{"name": "crate", "uri": "", "resource": '<object shape="box" size="0.1 0.1 0.1" '
+                                   'mass="1"/>', "xyz": [-0.96, 1.0, 0.3], "wxyz": [1.0, 0.0, 0.0, 0.0], "frame": "",
+                                   "namespace": "", "allow_renaming": False, "tags": []}],
+                     "names": ["crate"], "what": "spawn_entity crate"}
+    assert delete == {"entities": ["cube"], "what": "delete_entity cube"}
+    assert info == {"entity": "heavy", "category": "dynamic_object", "description": "pushed",
+                    "tags": ["furniture", "moved"], "what": "set_entity_info heavy"}
+
+
+def _last_truth(recorded: dict) -> Any:
+    """The recording's last ground truth (a TFMessage)."""
+    from rclpy.serialization import deserialize_message
+    from tf2_msgs.msg import TFMessage
+
+    raw = [m for topic, _, m in recorded["messages"] if topic == "/sigcore/ground_truth"][-1]
+    return deserialize_message(raw, TFMessage)
 
 
 def _replay(bag: Path, *args: str, env: dict | None = None) -> subprocess.CompletedProcess[str]:
@@ -116,11 +140,14 @@ def _replay(bag: Path, *args: str, env: dict | None = None) -> subprocess.Comple
 
 
 def test_replay_reproduces_the_run_bit_for_bit(recorded: dict) -> None:
-    """sigcore replay, with no client: every command applied at its step, the poses of every frame at the end equal
-    the recording's, bit for bit (MuJoCo); exit 0."""
+    """sigcore replay, with no client: every command applied at its step (the spawn, the delete and the entity
+    information too), the poses of every frame at the end equal the recording's, bit for bit (MuJoCo); exit 0."""
     out = _replay(recorded["bag"])
     assert out.returncode == 0, out.stdout + out.stderr
+    assert all(f"1 {kind}" in out.stdout for kind in ("spawn", "delete", "entity_info")), out.stdout
     assert "ground truth at step 500:" in out.stdout and "bitwise equal" in out.stdout
+    frames = {tf.child_frame_id for tf in _last_truth(recorded).transforms}
+    assert "ground_truth/crate" in frames and "ground_truth/cube" not in frames
 
 
 def test_replay_until_a_step_hands_over_to_live_clients(recorded: dict, tmp_path: Path) -> None:

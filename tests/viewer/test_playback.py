@@ -401,3 +401,29 @@ def test_a_recording_that_cannot_be_shown_is_refused_naming_what_is_missing(reco
         assert done.returncode == 2, done.stdout + done.stderr
         assert says in done.stderr and "Traceback" not in done.stderr, done.stderr
         assert done.stderr.count("sigcore view:") == 1, done.stderr
+
+
+def test_an_entity_spawned_while_running_is_drawn_from_then_on(tmp_path: Path) -> None:
+    """A crate spawned at 1 s (noted in the input log as the ROS 2 transport notes it): the playback's scene has
+    it, hidden before its spawn and shown where the ground truth has it after; nothing is listed as not drawn."""
+    from sigcore.sim.spawn import SpawnRequest
+
+    sim = Simulation(parse_world(CLEANUP), "mujoco")
+    recorder = Recorder(sim, tmp_path / "spawned")
+    try:
+        sim.step(500)
+        requests = [SpawnRequest(name="crate", resource='<object name="x" shape="box" size="0.2 0.2 0.2" mass="1"/>',
+                                 xyz=(0.0, 1.0, 0.5))]
+        sim.inputs.note_spawn(requests, sim.spawn(requests))
+        sim.step(500)
+    finally:
+        recorder.close()
+    recorded = playback.load(tmp_path / "spawned", tmp_path / "work")
+    assert recorded.untracked == []
+    crate = recorded.layout.parts.index(("crate", None))
+    poses, hidden = recorded.poses_at(round(0.9e9))
+    assert hidden[crate] and hidden.sum() == 1
+    poses, hidden = recorded.poses_at(round(1.9e9))
+    assert not hidden.any()
+    assert np.array_equal(poses[crate], truth_at(tmp_path / "spawned", 1.9)["ground_truth/crate"])
+    assert poses[crate][2] < 0.2  # it fell from 0.5 m onto the floor

@@ -338,8 +338,9 @@ class SimInterfaces:
 
     def _spawn_entity(self, req: Any, res: Any, reply: Any) -> bool:
         self._require_changeable("spawning")
-        outcome = self.sim.spawn([_spawn_request(req, req.uri, req.resource_string)])[0]
-        self.sim.inputs.note("spawn", what=f"spawn_entity {req.name or req.uri}")
+        request = _spawn_request(req, req.uri, req.resource_string)
+        outcome = self.sim.spawn([request])[0]
+        self.sim.inputs.note_spawn([request], [outcome], what=f"spawn_entity {req.name or req.uri}")
         res.result, res.entity_name = _spawned(outcome)
         return False
 
@@ -348,7 +349,8 @@ class SimInterfaces:
         requests = [_spawn_request(r, r.entity_resource.uri, r.entity_resource.resource_string)
                     for r in req.spawn_requests]
         outcomes = self.sim.spawn(requests) if requests else []
-        self.sim.inputs.note("spawn", what=f"spawn_entities ({len(requests)})")
+        if requests:
+            self.sim.inputs.note_spawn(requests, outcomes, what=f"spawn_entities ({len(requests)})")
         res.results = []
         for outcome in outcomes:
             result, name = _spawned(outcome)
@@ -368,7 +370,7 @@ class SimInterfaces:
         self._require_changeable("deleting")
         try:
             self.sim.delete([req.entity])
-            self.sim.inputs.note("delete", what=f"delete_entity {req.entity}")
+            self.sim.inputs.note("delete", entities=[req.entity], what=f"delete_entity {req.entity}")
         except SpawnRefusal as refusal:
             res.result = _result(SPAWN_CODES[refusal.code], str(refusal))
             return False

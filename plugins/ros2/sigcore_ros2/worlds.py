@@ -150,7 +150,7 @@ class WorldServices:
         except WorldRefusal as refusal:
             raise _load_refusal(refusal, req) from None
         try:
-            sim.inputs.note("world", what=f"load_world {world.name}")
+            sim.inputs.note("world", what=f"load_world {world.name}", uri=uri, resource_string=text)
             sim.load_world(world)
         except WorldRefusal as refusal:
             raise _load_refusal(refusal, req) from None

@@ -4,7 +4,8 @@ A recording made by ``sigcore run --record`` (:mod:`sigcore.record`) holds every
 
 * the **world** (the world file and its URDFs as attachments): the scene layout is built from it exactly as for a
   live run (a :class:`~sigcore.sim.Simulation` of it is constructed, never stepped, only for ``sim.scene``, the
-  declared publications and each entity's pose in the world file);
+  declared publications and each entity's pose in the world file), with the entities the run spawned (the input
+  log's spawns applied to it);
 * the **ground truth** (``/sigcore/ground_truth``, ``tf2_msgs/TFMessage`` at 30 Hz of simulated time and at the last
   step): the pose of every frame, ``ground_truth/<entity>`` for objects and humans, ``ground_truth/<robot>/<frame>``
   for each frame of a robot. At a moment ``t`` every frame is where the newest ground truth at or before ``t`` has
@@ -244,7 +245,8 @@ class Recorded:
         scans: Laser scans by topic; grids: occupancy grids by topic.
         start_ns, end_ns: The recording's first and last log time [ns].
         problems: What is wrong with the recording (cut...), from :func:`sigcore.record.bag_info`.
-        untracked: Frames the ground truth names that the world file has not (entities spawned while running).
+        untracked: Frames the ground truth names that the scene has not (entities spawned while running whose spawn
+            could not be rebuilt).
     """
 
     path: Path
@@ -322,6 +324,7 @@ def load(path: Path, workdir: Path, stop: Callable[[], bool] | None = None) -> R
         raise ViewerError(f"the recorded world cannot be rebuilt: {e}") from None
     sim = _scene_of(world, facts.get("backend", "mujoco"), path)
     try:
+        _spawn_recorded(sim, info, facts.get("inputs", INPUTS), path)
         layout = layout_of(sim)
         base = sim.backend.get_poses(layout.parts) if layout.parts else np.empty((0, 7))
         kinds = {name: sim.agents[name].kind for name in sim.entity_names if name in sim.agents}
@@ -335,6 +338,33 @@ def load(path: Path, workdir: Path, stop: Callable[[], bool] | None = None) -> R
                                                                                        strict=True)]
     return _read(path, info, facts, layout, kinds, np.asarray(base, dtype=float), names, shown, overlays, dt_ns,
                  world.name, stop or (lambda: False))
+
+
+def _spawn_recorded(sim: Any, info: BagInfo, inputs_topic: str, path: Path) -> None:
+    """Add to the scene every entity the run spawned (the input log's spawns, in their order), so that they are
+    drawn: the ground truth shows them from their spawn on and hides them before. A spawn that cannot be rebuilt
+    (a file it named is gone, a recording made before spawns were logged with their requests) is skipped: its frames
+    are listed as not drawn."""
+    from sigcore.record.bag import iter_messages
+    from sigcore.record.serialize import Serializer
+    from sigcore.sim.inputs import spawn_request_of
+
+    if not any(t.name == inputs_topic for t in info.topics):
+        return
+    serializer = Serializer()
+    for _, t_ns, data in iter_messages(info, [inputs_topic]):
+        try:
+            item = json.loads(serializer.deserialize("std_msgs/msg/String", data).data)
+            if item.get("kind") != "spawn" or "requests" not in item.get("args", {}):
+                continue
+            requests = [spawn_request_of(r) for r in item["args"]["requests"]]
+            for outcome in sim.spawn(requests):
+                if not isinstance(outcome, str):
+                    log.warning("viewer: %s: an entity spawned at %.3f s is not drawn: %s", path, t_ns / 1e9,
+                                outcome)
+        except Exception as e:  # an input that does not decode or apply: the rest is shown
+            log.warning("viewer: %s: a spawn at %.3f s cannot be rebuilt (%s); its entities are not drawn", path,
+                        t_ns / 1e9, e)
 
 
 def _files(info: BagInfo) -> str:
@@ -606,8 +636,8 @@ class Player:
         if r.problems:
             note += f"  \n**The recording is cut**: it is shown up to t = {r.end_ns / 1e9:.2f} s."
         if r.untracked:
-            note += (f"  \n{len(r.untracked)} frame(s) of entities added while running are not drawn (the world file "
-                     "has no shape for them).")
+            note += (f"  \n{len(r.untracked)} frame(s) of entities added while running are not drawn (their spawn "
+                     "could not be rebuilt from the input log).")
         return Timeline(r.start_ns / 1e9, r.end_ns / 1e9, tuple(SPEEDS), speed_name(self.clock.speed), note,
                         {"names": True, "frames": True, "scan": bool(r.scans), "contacts": False,
                          "map": bool(r.grids)})
