@@ -56,17 +56,12 @@ class BagError(SigcoreError, ValueError):
     """A bag cannot be written (its directory exists, is not writable) or read (missing, cut, foreign)."""
 
 
-def qos_profiles(offered: Offered) -> list[dict[str, Any]]:
-    """rosbag2's ``offered_qos_profiles`` (version 9) of one publisher offering ``offered``."""
-    return _writer.qos_profiles(offered.depth, offered.reliable, offered.latched)
-
-
 @dataclass
 class _Topic:
+    """A recorded topic as the simulation's side knows it: its index in the writer process, the messages handed
+    over (its type, hash and QoS went to the writer with the index)."""
+
     name: str
-    typename: str
-    digest: str
-    offered: Offered
     channel: int
     count: int = 0
 
@@ -143,7 +138,7 @@ class BagWriter:
         topic = self.topics.get(name)
         if topic is not None or not self.active:
             return topic
-        topic = _Topic(name, typename, digest, offered, len(self.topics))
+        topic = _Topic(name, len(self.topics))
         if not self._send(("topic", topic.channel, name, typename, definition.encode(), digest,
                            (offered.depth, offered.reliable, offered.latched))):
             return None

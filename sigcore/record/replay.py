@@ -37,7 +37,8 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("sigcore.record")
 
-__all__ = ["Recording", "ReplayError", "Replayer", "compare", "describe_inputs", "load_recording", "poses_now"]
+__all__ = ["Recording", "ReplayError", "Replayer", "compare", "decode_input", "describe_inputs", "load_recording",
+           "poses_now"]
 
 
 @dataclass
@@ -125,8 +126,7 @@ def load_recording(path: Path) -> Recording:
             for _, channel, message in make_reader(f).iter_messages(topics=[INPUTS, GROUND_TRUTH],
                                                                     log_time_order=False):
                 if channel.topic == INPUTS:
-                    text = serializer.deserialize("std_msgs/msg/String", message.data).data
-                    inputs.append(Input.from_json(json.loads(text)))
+                    inputs.append(decode_input(serializer, message.data))
                 else:
                     msg = serializer.deserialize("tf2_msgs/msg/TFMessage", message.data)
                     truth.append((message.log_time // dt_ns, {
@@ -135,6 +135,18 @@ def load_recording(path: Path) -> Recording:
                                                      tf.transform.rotation.x, tf.transform.rotation.y,
                                                      tf.transform.rotation.z]) for tf in msg.transforms}))
     return Recording(Path(path), info, facts, attachments, inputs, truth)
+
+
+def decode_input(serializer: Serializer, data: bytes) -> Input:
+    """One message of the input log (``/sigcore/inputs``: a ``std_msgs/msg/String`` holding the JSON object).
+
+    Raises:
+        ValueError: the message does not decode or holds no input (``json``, ``KeyError`` as ``ValueError``).
+    """
+    try:
+        return Input.from_json(json.loads(serializer.deserialize("std_msgs/msg/String", data).data))
+    except (KeyError, TypeError, AttributeError) as e:
+        raise ValueError(f"not an input: {e}") from None
 
 
 class Replayer(Transport):

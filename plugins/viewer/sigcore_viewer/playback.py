@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import bisect
 import dataclasses
-import json
 import logging
 import math
 import struct
@@ -346,6 +345,7 @@ def _spawn_recorded(sim: Any, info: BagInfo, inputs_topic: str, path: Path) -> N
     (a file it named is gone, a recording made before spawns were logged with their requests) is skipped: its frames
     are listed as not drawn."""
     from sigcore.record.bag import iter_messages
+    from sigcore.record.replay import decode_input
     from sigcore.record.serialize import Serializer
     from sigcore.sim.inputs import spawn_request_of
 
@@ -354,10 +354,10 @@ def _spawn_recorded(sim: Any, info: BagInfo, inputs_topic: str, path: Path) -> N
     serializer = Serializer()
     for _, t_ns, data in iter_messages(info, [inputs_topic]):
         try:
-            item = json.loads(serializer.deserialize("std_msgs/msg/String", data).data)
-            if item.get("kind") != "spawn" or "requests" not in item.get("args", {}):
+            item = decode_input(serializer, data)
+            if item.kind != "spawn" or "requests" not in item.args:
                 continue
-            requests = [spawn_request_of(r) for r in item["args"]["requests"]]
+            requests = [spawn_request_of(r) for r in item.args["requests"]]
             for outcome in sim.spawn(requests):
                 if not isinstance(outcome, str):
                     log.warning("viewer: %s: an entity spawned at %.3f s is not drawn: %s", path, t_ns / 1e9,
@@ -403,6 +403,7 @@ def _read(path: Path, info: BagInfo, facts: dict[str, str], layout: SceneLayout,
           dt_ns: int, world: str, stop: Callable[[], bool]) -> Recorded:
     """One pass over the messages: the ground truth, the shown publications' lines, scans and grids."""
     from sigcore.record.bag import iter_messages
+    from sigcore.record.replay import decode_input
     from sigcore.record.serialize import Serializer
 
     truth_topic = facts.get("ground_truth", TRUTH)
@@ -482,7 +483,7 @@ def _read(path: Path, info: BagInfo, facts: dict[str, str], layout: SceneLayout,
                 lines.results.setdefault(topic, []).append(item)
         elif topic == inputs_topic:
             try:
-                kind = json.loads(serializer.deserialize("std_msgs/msg/String", data).data).get("kind")
+                kind = decode_input(serializer, data).kind
             except Exception:  # an input that does not decode changes nothing shown
                 continue
             if kind == "reset":
