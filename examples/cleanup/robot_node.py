@@ -32,6 +32,7 @@ JOBS = [("can_0", "trashbox_2", "l"), ("apple_2", "trashbox_1", "l"), ("petbottl
 SHOULDER_Y, SHOULDER_Z, UPPER, FORE, HAND = 0.20, 1.15, 0.37, 0.31, 0.15
 JOINTS = ("shoulder_pan_joint", "shoulder_pitch_joint", "elbow_joint", "wrist_pitch_joint", "wrist_roll_joint")
 TUCK = (0.0, 0.4, 2.4, -2.1, 0.0)  # carry pose, hand above table height
+WRIST_LIMIT = 2.2  # the wrist pitch joints' limits in sigbot.urdf [rad]
 HOVER, DROP_Z, GRASP_ABOVE, GRASP_RADIUS = 0.90, 0.65, 0.03, 0.09
 PICK_AHEAD, PICK_SIDE, DROP_AHEAD, DROP_SIDE, STAGE = 0.50, 0.20, 0.52, 0.10, 0.80
 
@@ -48,7 +49,8 @@ def hand_down(side: str, x: float, y: float, z: float) -> tuple[float, ...]:
     c = (reach * reach + drop * drop - UPPER**2 - FORE**2) / (2 * UPPER * FORE)
     elbow = math.acos(max(-1.0, min(1.0, c)))
     pitch = math.atan2(reach, -drop) - math.atan2(FORE * math.sin(elbow), UPPER + FORE * math.cos(elbow))
-    return (math.atan2(y - sy, x), pitch, elbow, -(pitch + elbow), 0.0)
+    wrist = max(-WRIST_LIMIT, min(WRIST_LIMIT, -(pitch + elbow)))  # a hair past the limit is refused otherwise
+    return (math.atan2(y - sy, x), pitch, elbow, wrist, 0.0)
 
 
 def stop_pose(tx: float, ty: float, ahead: float, side_offset: float, side: str) -> tuple[float, float, float,
