@@ -20,8 +20,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 
 import rclpy
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sigcore_msgs.msg import OnCollisionMsg, RefereeEvent, RefereeResult
@@ -51,12 +53,18 @@ class Moderator(Node):
         self.send = self.create_client(SendMsgToSrv, f"{ME}_send_msg_to_srv")
         self.create_subscription(OnCollisionMsg, f"{ROBOT}_onCollisionMsg", self.on_collision, 50)
         self.reported = 0
+        self.spinner = SingleThreadedExecutor()  # as robot_node.py: not rclpy's busy spin_until_future_complete
+        self.spinner.add_node(self)
 
     def call(self, client, request):  # type: ignore[no-untyped-def]
         if not client.wait_for_service(timeout_sec=30.0):
             raise RuntimeError(f"service {client.srv_name} is not available")
         future = client.call_async(request)
-        rclpy.spin_until_future_complete(self, future, timeout_sec=10.0)
+        deadline = time.monotonic() + 10.0
+        while not future.done():
+            if time.monotonic() > deadline or not rclpy.ok():
+                raise RuntimeError(f"{client.srv_name} did not answer")
+            self.spinner.spin_once(timeout_sec=0.1)
         return future.result()
 
     def connect_referee(self) -> None:
@@ -110,7 +118,7 @@ def main() -> int:
     try:
         node.connect_referee()
         while rclpy.ok() and not node.done:
-            rclpy.spin_once(node, timeout_sec=0.5)
+            node.spinner.spin_once(timeout_sec=0.5)
         return 0
     except RuntimeError as e:
         node.get_logger().error(str(e))

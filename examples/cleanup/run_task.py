@@ -38,6 +38,8 @@ def main() -> int:
     ap.add_argument("--factor", type=float, default=2.5, help="simulation pace, times real time")
     ap.add_argument("--backend", default="mujoco")
     ap.add_argument("--timeout", type=float, default=240.0, help="give up after this many wall seconds")
+    ap.add_argument("--lockstep", action="store_true",
+                    help="the robot node pauses the simulation and steps it itself, one control period at a time")
     ap.add_argument("--domain", type=int, default=None, help="ROS_DOMAIN_ID (default: from the process id)")
     ap.add_argument("--record", default=None, metavar="DIR",
                     help="record the run into DIR (rosbag2, MCAP): sigcore bag info DIR, sigcore replay DIR")
@@ -56,7 +58,8 @@ def main() -> int:
     moderator = [sys.executable, str(HERE / "moderator_node.py")]
     if args.referee_log:
         moderator += ["--log", args.referee_log]
-    nodes = [_start(moderator, env), _start([sys.executable, str(HERE / "robot_node.py")], env)]
+    nodes = [_start(moderator, env), _start([sys.executable, str(HERE / "robot_node.py"),
+                                                     *(["--lockstep"] if args.lockstep else [])], env)]
     try:
         code = sim.wait(timeout=args.timeout)
     except subprocess.TimeoutExpired:
