@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from .transport import Transport
     from .viewer import Viewer
     from .world import World
+    from .world.randomize import Layout
 
 app = typer.Typer(help="sigcore: drive a physics simulation through ROS 2 topics and services.",
                   no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
@@ -42,6 +43,12 @@ ViewerHost = Annotated[str, typer.Option(help="address the viewer listens on; 0.
 ViewerPort = Annotated[int | None, typer.Option(
     help="the viewer's port; default 8080, or the next free one when it is taken")]
 ViewerRate = Annotated[float, typer.Option(help="scene updates per second of wall time [Hz]")]
+Seed = Annotated[str | None, typer.Option(
+    "--seed", metavar="N", help="draw the world's <randomize> with this seed (the same N, the same world) and use it "
+    "as the seed of the sensor noise; an integer >= 0")]
+
+MAX_SEED = 2**64 - 1
+"""Largest ``--seed``."""
 
 
 def _fail(lines: list[str], code: int = 2) -> typer.Exit:
@@ -61,8 +68,48 @@ def _check_backend(value: str) -> str:
     return value
 
 
-def _load(world_file: Path, backend: str, controllers: list[str] | None = None) -> Simulation:
-    """Build the simulation; every failure is printed as what it is (world file, controller, feature, backend)."""
+def _seed(text: str | None) -> int | None:
+    """The value of ``--seed`` (exit 2 unless an integer 0 <= N <= :data:`MAX_SEED`)."""
+    if text is None:
+        return None
+    digits = text.strip()
+    if not re.fullmatch(r"[0-9]{1,20}", digits) or int(digits) > MAX_SEED:
+        raise _fail([f"--seed {text!r}: not a seed; valid: an integer 0 <= N <= {MAX_SEED} (the same N gives the same "
+                     "world)"])
+    return int(digits)
+
+
+def _parse(world_file: Path) -> World:
+    """The world file, parsed (exit 2 with its issues)."""
+    try:
+        return parse_world(world_file)
+    except WorldError as e:
+        raise _fail([str(i) for i in e.issues]) from None
+
+
+def _draw(world: World, seed: int | None, unseeded: str) -> Layout | None:
+    """``world`` drawn with ``--seed`` (its ``<randomize>``, and the seed of its sensor noise), or None without it;
+    says on stderr what the seed does (or, without one, that the poses are the file's: ``unseeded``)."""
+    from .world.randomize import draw
+
+    if seed is None:
+        if world.randomize is not None:
+            err.print(f"{world.source}: <randomize> of {len(world.randomize.entities)} entities: {unseeded}; --seed N "
+                      "draws them (the same N, the same world)", markup=False, soft_wrap=True)
+        return None
+    if world.randomize is None:
+        err.print(f"--seed {seed}: {world.source} has no <randomize>: the seed only sets the seed of the sensor noise "
+                  "(instead of <world seed>)", markup=False, soft_wrap=True)
+    try:
+        return draw(world, seed, noise=True)
+    except WorldError as e:
+        raise _fail([str(i) for i in e.issues]) from None
+
+
+def _load(world_file: Path, backend: str, controllers: list[str] | None = None, world: World | None = None) \
+        -> Simulation:
+    """Build the simulation of ``world`` (else of the file as written); every failure is printed as what it is
+    (world file, controller, feature, backend)."""
     from .agent.exceptions import ApiError
     from .backend import BackendError
     from .sim import FeatureError, Simulation
@@ -73,10 +120,8 @@ def _load(world_file: Path, backend: str, controllers: list[str] | None = None) 
         if not sep or not agent or not spec:
             raise _fail([f"--controller wants AGENT=CONTROLLER (e.g. robot_000=cleanup.robot), got {item!r}"])
         overrides[agent] = spec
-    try:
-        world = parse_world(world_file)
-    except WorldError as e:
-        raise _fail([str(i) for i in e.issues]) from None
+    if world is None:
+        world = _parse(world_file)
     try:
         return Simulation(world, backend, overrides)  # fires sigcore_world_loaded
     except BackendError as e:  # first (a BackendRefusal is an ApiError too); located at the entity it names
@@ -349,13 +394,16 @@ def run(
         "0: at the start and the end only")] = 30.0,
     overwrite: Annotated[bool, typer.Option(
         "--overwrite", help="with --record: replace the recording in DIR if it exists")] = False,
+    seed: Seed = None,
 ) -> None:
     """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
     stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed. Arguments after
     --ros-args (up to an optional --) go to the transport: -r FROM:=TO, -r __ns:=/NS, -p NAME:=VALUE,
-    --log-level LEVEL. --viewer shows the world live in a browser, with play, pause, step, reset and messages."""
+    --log-level LEVEL. --viewer shows the world live in a browser, with play, pause, step, reset and messages.
+    --seed N draws the world's <randomize> (the same N, the same world) and seeds the sensor noise."""
     from .sim import run as run_sim
 
+    seed_value = _seed(seed)
     _check_pace(fast, realtime, factor)
     if paused and transport == "none" and not viewer:
         raise _fail(["--paused needs a transport or a viewer that can resume the simulation; drop --transport "
@@ -374,7 +422,9 @@ def run(
     missing = [str(p) for p in worlds or [] if not p.exists()]
     if missing:
         raise _fail([f"--worlds {p}: no such file or folder" for p in missing])
-    sim = _load(world_file, backend, controller)
+    world = _parse(world_file)
+    layout = _draw(world, seed_value, "running it with the poses as written")
+    sim = _load(world_file, backend, controller, layout.world if layout is not None else world)
     sim.world_sources = list(worlds or [])
     _check_endpoints(transport_obj, sim)
     gate = _gate(wait_for, wait_timeout, paused, transport_obj, sim)
@@ -414,7 +464,8 @@ def run(
         sim.dispatch.budget = CallbackBudget(callback_budget, disable_slow_controllers)
     except BudgetError as e:
         raise _fail([f"--callback-budget: {e}"]) from None
-    out.print(f"sigcore {__version__}: world '{sim.world.name}' ({world_file}) on backend '{backend}', "
+    drawn = f", drawn with seed {seed_value}" if layout is not None and world.randomize is not None else ""
+    out.print(f"sigcore {__version__}: world '{sim.world.name}' ({world_file}{drawn}) on backend '{backend}', "
               f"timestep {sim.dt} s")
     try:
         report = run_sim(sim, duration=duration, steps=steps, realtime_factor=rtf,
@@ -477,17 +528,21 @@ def view(
     viewer_host: ViewerHost = "127.0.0.1",
     viewer_port: ViewerPort = None,
     viewer_rate: ViewerRate = 30.0,
+    seed: Seed = None,
 ) -> None:
     """Open a world in the web viewer, paused at t = 0: press play in the browser (= sigcore run WORLD --viewer
     --paused). The transport (ROS 2 by default) runs beside it; Ctrl-C ends the run and prints the results.
-    Given a recording (sigcore run --record DIR), the viewer plays it back with a timeline to scrub."""
+    Given a recording (sigcore run --record DIR), the viewer plays it back with a timeline to scrub (with the seed
+    the run was drawn with)."""
     if world_file.is_dir() or world_file.suffix == ".mcap":
+        if seed is not None:
+            raise _fail(["--seed is for a world file: a recording is shown with the seed it was recorded with"])
         _view_recording(world_file, viewer_host, viewer_port, viewer_rate)
         return
     run(world_file, backend=backend, duration=None, steps=None, fast=False, realtime=False, factor=None,
         paused=True, wait_for=None, wait_timeout=0.0, transport=transport, quiet=True, controller=controller,
         callback_budget=CALLBACK_BUDGET, disable_slow_controllers=False, worlds=None, viewer=True,
-        viewer_host=viewer_host, viewer_port=viewer_port, viewer_rate=viewer_rate)
+        viewer_host=viewer_host, viewer_port=viewer_port, viewer_rate=viewer_rate, seed=seed)
 
 
 def _view_recording(path: Path, host: str, port: int | None, rate: float) -> None:
@@ -529,11 +584,25 @@ def check(
     backend: Annotated[str, typer.Option(help="backend to build it with", callback=_check_backend)] = "mujoco",
     transport: Annotated[str | None, typer.Option(
         help=f"transport whose endpoints to check; default '{DEFAULT_TRANSPORT}' when it can start; 'none'")] = None,
+    seed: Seed = None,
 ) -> None:
     """Validate a world file: syntax, references, controllers, plugins, that the backend builds it, and that the
-    transport can create every endpoint (valid ROS names, none used twice)."""
+    transport can create every endpoint (valid ROS names, none used twice). --seed N checks the world its
+    <randomize> draws with N and prints what was drawn: each entity's x y z [m] and yaw [rad], each option picked."""
+    seed_value = _seed(seed)
     transport_obj = _transport(transport)
-    sim = _load(world_file, backend)
+    world = _parse(world_file)
+    layout = _draw(world, seed_value, "checked with the poses as written")
+    if layout is not None and world.randomize is not None:
+        out.print(f"{world_file}: seed {layout.seed} draws")
+        for pick in layout.picks:
+            choice = next(c for c in world.randomize.choices if c.entity == pick.entity)
+            out.print(f"  {pick.entity:<16} option {pick.option + 1} of {len(choice.options)} (line {pick.line})")
+        for p in layout.placements:
+            x, y, z = (v + 0.0 for v in p.xyz)
+            on = f"  on {p.surface}" if p.surface is not None else ""
+            out.print(f"  {p.entity:<16} x {x:10.6f}  y {y:10.6f}  z {z:9.6f}  yaw {p.rpy[2] + 0.0:9.6f}{on}")
+    sim = _load(world_file, backend, world=layout.world if layout is not None else world)
     _check_endpoints(transport_obj, sim)
     with_transport = f", endpoints of '{transport_obj.name}' checked" if transport_obj is not None else ""
     out.print(f"{world_file}: ok ({len(sim.agents)} agents, built with '{backend}'{with_transport})")
@@ -735,8 +804,9 @@ def replay(
         raise _fail([f"sigcore replay: the recording starts at step {rec.start_step}, a new simulation at "
                      f"{sim.step_count}"])
     kinds = ", ".join(f"{n} {k}" for k, n in describe_inputs(rec.inputs).items()) or "none"
-    out.print(f"sigcore {__version__}: replaying {path} (world '{sim.world.name}', backend '{backend}') to step "
-              f"{target} of {final}; recorded commands: {kinds}")
+    drawn = f", drawn with seed {rec.seed}" if rec.seed is not None and world.randomize is not None else ""
+    out.print(f"sigcore {__version__}: replaying {path} (world '{sim.world.name}'{drawn}, backend '{backend}') to "
+              f"step {target} of {final}; recorded commands: {kinds}")
     replayer = Replayer(rec.inputs, until=target)
     api_log = logging.getLogger("sigcore.api")
     level = api_log.level

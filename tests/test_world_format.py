@@ -410,7 +410,7 @@ _DOCUMENTED: dict[str, type[BaseModel]] = {
     "named_pose": NamedPose,
 }
 _NOT_ATTRIBUTES = {"kind", "lidars", "cameras", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
-                   "config", "line", "column", "positions", "named_poses"}
+                   "config", "line", "column", "positions", "named_poses", "randomize"}
 _BOUNDS = (annotated_types.Gt, annotated_types.Ge, annotated_types.Lt, annotated_types.Le)
 
 

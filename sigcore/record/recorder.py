@@ -15,7 +15,8 @@ What goes in (all of it, or the topics ``--record-topics`` regexes select):
   outside (:mod:`sigcore.sim.inputs`), logged at the time of the step it took effect, which ``sigcore replay`` applies
   again;
 - the world file and every URDF it uses as MCAP attachments, and the run's facts (sigcore's version, world, backend,
-  timestep) as an MCAP metadata record ``sigcore``.
+  timestep, the seed its ``<randomize>`` was drawn with and that of its sensor noise) as an MCAP metadata record
+  ``sigcore``.
 
 Camera images are costly to render: the recorder asks for them (:meth:`Recorder.wants`) only when a
 ``--record-topics`` pattern names their topic; otherwise it records them while another sink (a ROS 2 subscriber)
@@ -224,6 +225,8 @@ class Recorder(PublicationSink):
                                  "world_attachment": f"world/{rel}", "backend": sim.backend.name,
                                  "timestep": repr(sim.dt), "start_step": str(sim.step_count),
                                  "controllers": json.dumps(sim.controller_overrides),
+                                 "seed": "" if world.sample_seed is None else str(world.sample_seed),
+                                 "noise_seed": str(world.seed),
                                  "ground_truth": GROUND_TRUTH, "inputs": INPUTS})
 
     # ------------------------------------------------------------------ the end

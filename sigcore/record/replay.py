@@ -25,6 +25,7 @@ import numpy as np
 
 from ..sim.inputs import Input, ReplayError
 from ..transport import Transport
+from ..world.randomize import sample
 from .bag import BagError, BagInfo, bag_info, read_extras
 from .recorder import GROUND_TRUTH, INPUTS, truth_frames
 from .serialize import Serializer
@@ -66,14 +67,47 @@ class Recording:
     def controllers(self) -> dict[str, str]:
         return dict(json.loads(self.facts.get("controllers") or "{}"))
 
+    @property
+    def seed(self) -> int | None:
+        """The seed the run's world was drawn with (``sigcore run --seed``); None: as written."""
+        return self._integer("seed")
+
+    @property
+    def noise_seed(self) -> int | None:
+        """The seed of the run's sensor noise (``<world seed>``, or ``sigcore run --seed``); None: not recorded."""
+        return self._integer("noise_seed")
+
+    def _integer(self, fact: str) -> int | None:
+        text = self.facts.get(fact, "")
+        if text and not text.isdigit():
+            raise ReplayError(f"{self.path}: the metadata's {fact} {text!r} is not an integer >= 0")
+        return int(text) if text else None
+
     def world(self, workdir: Path | None = None) -> World:
         """The recorded world: its original file when it is there with the recorded content, else the attached
-        files written under ``workdir`` (a temporary folder by default).
+        files written under ``workdir`` (a temporary folder by default); drawn with the recorded :attr:`seed` and
+        with the recorded seed of its sensor noise, as the run had it.
 
         Raises:
-            ReplayError: the world file is not attached (naming what the recording holds), or does not parse.
+            ReplayError: the world file is not attached (naming what the recording holds), or does not parse, or
+                cannot be drawn with the recorded seed.
         """
-        from ..world import WorldError, parse_world
+        from ..world import WorldError
+
+        try:
+            world = self._parsed(workdir)
+            if self.seed is not None:
+                world = sample(world, self.seed)
+        except WorldError as e:
+            raise ReplayError(f"{self.path}: the recorded world does not load: {e}") from None
+        noise = self.noise_seed
+        if noise is not None and noise != world.seed:
+            world = world.model_copy(update={"seed": noise})
+        return world
+
+    def _parsed(self, workdir: Path | None) -> World:
+        """The recorded world file, parsed (see :meth:`world`)."""
+        from ..world import parse_world
 
         name = self.facts.get("world_attachment", "")
         text = self.attachments.get(name)
@@ -81,20 +115,17 @@ class Recording:
             raise ReplayError(f"{self.path}: the world file is not attached ({name or 'no sigcore metadata'}); "
                               f"attachments: {', '.join(self.attachments) or 'none'}")
         original = Path(self.facts.get("world_file", ""))
-        try:
-            if original.is_file() and original.read_bytes() == text:
-                return parse_world(original)
-            folder = Path(workdir or tempfile.mkdtemp(prefix="sigcore_replay_"))
-            for rel, data in self.attachments.items():
-                target = (folder / rel).resolve()
-                if folder.resolve() not in target.parents:
-                    raise ReplayError(f"{self.path}: attachment {rel!r} would be written outside {folder}; a "
-                                      "recording's files are named under world/, without '..'")
-                target.parent.mkdir(parents=True, exist_ok=True)
-                target.write_bytes(data)
-            return parse_world(folder / name)
-        except WorldError as e:
-            raise ReplayError(f"{self.path}: the recorded world does not load: {e}") from None
+        if original.is_file() and original.read_bytes() == text:
+            return parse_world(original)
+        folder = Path(workdir or tempfile.mkdtemp(prefix="sigcore_replay_"))
+        for rel, data in self.attachments.items():
+            target = (folder / rel).resolve()
+            if folder.resolve() not in target.parents:
+                raise ReplayError(f"{self.path}: attachment {rel!r} would be written outside {folder}; a "
+                                  "recording's files are named under world/, without '..'")
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(data)
+        return parse_world(folder / name)
 
 
 def load_recording(path: Path) -> Recording:

@@ -80,3 +80,12 @@ def issue_code(issues: Sequence[WorldIssue]) -> IssueCode:
     if any(m.startswith("unknown element") for m in messages):
         return "UNSUPPORTED_ELEMENTS"
     return "RESOURCE_PARSE_ERROR"
+
+
+class RandomizeError(WorldError):
+    """A world's ``<randomize>`` cannot be drawn with a seed: an entity found no free place in its attempts (the
+    issue is at its ``<pose>``, naming the place, the attempts and what to change)."""
+
+
+class SeedError(SigcoreError, ValueError):
+    """A seed that is not an integer >= 0."""

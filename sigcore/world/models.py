@@ -23,6 +23,7 @@ from pydantic import (
 )
 
 from .exceptions import FieldError
+from .randomization import Located, Randomize
 from .urdf import UrdfDocument, UrdfFiles
 
 NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]*$"
@@ -155,7 +156,7 @@ class Pose(_Model):
 PoseField = Annotated[Pose, BeforeValidator(Pose.parse)]
 
 
-class PluginConfig(_Model):
+class PluginConfig(Located):
     """``<plugin name="slam" agent="robot_000" .../>``: a feature plugin enabled for this world.
 
     Every other attribute is kept as a string in ``config``; the core validates them against the feature's
@@ -164,14 +165,6 @@ class PluginConfig(_Model):
 
     name: Name = Field(description="plugin to enable, e.g. 'slam'")
     config: dict[str, str] = Field(default_factory=dict)
-    line: int = 0
-    column: int = 0
-    positions: dict[str, tuple[int, int]] = Field(default_factory=dict,
-                                                  description="(line, column) of each attribute, for messages")
-
-    def location(self, attribute: str | None = None) -> tuple[int, int]:
-        """``(line, column)`` of attribute ``attribute`` (of the element if ``None`` or absent)."""
-        return self.positions.get(attribute or "", (self.line, self.column))
 
 
 class Drive(_Model):
@@ -459,9 +452,11 @@ class World(_Model):
     plugins: tuple[PluginConfig, ...] = ()
     agents: tuple[AgentModel, ...] = ()
     named_poses: tuple[NamedPose, ...] = ()
+    randomize: Randomize | None = Field(default=None, description="what a seeded run draws (<randomize>)")
     source: Path = Path("<memory>")
     _locations: dict[tuple[str, str | None], tuple[int, int]] = PrivateAttr(default_factory=dict)
     _urdfs: UrdfFiles = PrivateAttr(default_factory=UrdfFiles)
+    _sample_seed: int | None = PrivateAttr(default=None)
 
     def location(self, agent: str, attribute: str | None = None) -> tuple[int, int]:
         """``(line, column)`` of an agent's element, or of one of its attributes, or of a child element
@@ -532,6 +527,19 @@ class World(_Model):
         copy = self.model_copy(update={"agents": tuple(agents)})
         copy._locations = self._locations
         copy._urdfs = self._urdfs
+        return copy
+
+    @property
+    def sample_seed(self) -> int | None:
+        """The seed this world was drawn with (:func:`sigcore.world.randomize.sample`, ``sigcore run --seed``);
+        None: the file as written."""
+        return self._sample_seed
+
+    def drawn(self, agents: tuple[AgentModel, ...], seed: int) -> World:
+        """This world with ``agents`` drawn by its ``<randomize>`` with ``seed`` (:attr:`sample_seed`): the same
+        file, locations and shared URDF documents; the caller has validated the agents."""
+        copy = self.with_agents(agents)
+        copy._sample_seed = seed
         return copy
 
     def share_urdfs(self, files: UrdfFiles) -> None:

@@ -30,6 +30,7 @@ from .models import (
     World,
     start_pose_name,
 )
+from .randomization import Choice, Option, Randomize, RandomPose, with_option
 from .urdf import UrdfError, UrdfFiles, UrdfModel, resolve_mesh
 
 _AGENTS: dict[str, type[BaseModel]] = {"robot": Robot, "object": Object, "human": Human, "agent": BareAgent}
@@ -43,7 +44,8 @@ _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
     "gains": (Gains, "gains", False),
 }
 _INTERNAL_FIELDS = {"kind", "lidars", "cameras", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
-                    "config", "line", "column", "positions", "named_poses"}
+                    "config", "line", "column", "positions", "named_poses", "randomize", "poses", "choices",
+                    "options", "attributes"}
 _LIBXML_POSITION = re.compile(r", line \d+, column \d+$")
 
 
@@ -148,7 +150,11 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
     agents: list[Any] = []
     plugins: list[Any] = []
     poses: list[Any] = []
-    for child in reader.children_of(root, {"plugin": 1, "named_pose": 1, **_AGENTS}):
+    randomizers: list[etree._Element] = []
+    for child in reader.children_of(root, {"plugin": 1, "named_pose": 1, **_AGENTS, "randomize": 1}):
+        if child.tag == "randomize":
+            randomizers.append(child)
+            continue
         if child.tag == "named_pose":
             reader.children_of(child, {})
             pose = reader.build(child, NamedPose, {})
@@ -167,14 +173,22 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
     _unique(reader, plugins, "name", "enable a plugin once")
     _unique(reader, poses, "name", "every named pose needs its own name")
     _automatic_poses(reader, poses, [a for _, a in agents])
+    randomize = _randomize(reader, randomizers, agents, path.parent)
     world = reader.build(root, World, {"agents": tuple(a for _, a in agents),
                                        "plugins": tuple(p for _, p in plugins),
-                                       "named_poses": tuple(p for _, p in poses), "source": path})
+                                       "named_poses": tuple(p for _, p in poses), "randomize": randomize,
+                                       "source": path})
     if reader.issues or world is None:
         raise WorldError(sorted(reader.issues, key=lambda i: (i.line, i.column)))
     reader.locations[("", None)] = reader.map.element(root)  # the <world> element (World.location(""))
     world.record_locations(reader.locations)
     world.share_urdfs(reader.urdfs)
+    if world.randomize is not None:  # against the world: names, surfaces, areas, bounds (before any seed)
+        from .randomize import check
+
+        issues = check(world)
+        if issues:
+            raise WorldError(sorted(issues, key=lambda i: (i.line, i.column)))
     return world
 
 
@@ -254,6 +268,90 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
             for child, value in children[field]:
                 reader.locations[(agent.name, f"{tag}:{value.name}")] = reader.map.attribute(child, "name")
     return agent
+
+
+def _located(reader: _Reader, element: etree._Element) -> dict[str, Any]:
+    """Where ``element`` and each of its attributes are: the ``line``, ``column`` and ``positions`` fields."""
+    line, column = reader.map.element(element)
+    return {"line": line, "column": column,
+            "positions": {str(k): reader.map.attribute(element, str(k)) for k in element.attrib}}
+
+
+def _randomize(reader: _Reader, elements: list[etree._Element], agents: list[Any], base: Path) -> Randomize | None:
+    """The ``<randomize>`` element (at most one) as a model; its ``<choose>`` options validated against their
+    object. What needs the whole world (names, surfaces, bounds) is :func:`sigcore.world.randomize.check`'s."""
+    if not elements:
+        return None
+    for extra in elements[1:]:
+        reader.issue(extra, None, f"<randomize> may appear only once in a <world> (first on line "
+                                  f"{reader.line(elements[0])})")
+    element = elements[0]
+    built = {agent.name: child for child, agent in agents}
+    poses: list[RandomPose] = []
+    choices: list[Choice] = []
+    for child in reader.children_of(element, {"pose": 1, "choose": 1}):
+        if child.tag == "pose":
+            reader.children_of(child, {})
+            pose = reader.build(child, RandomPose, _located(reader, child))
+            if pose is not None:
+                poses.append(pose)
+            continue
+        target = built.get(str(child.get("entity", "")).strip())
+        if child.get("entity") is not None and (target is None or target.tag != "object"):
+            name = str(child.get("entity")).strip()
+            objects = [n for n, e in built.items() if e.tag == "object"]
+            what = f"'{name}' is a <{target.tag}>" if target is not None else f"no object '{name}'"
+            reader.issue(child, "entity", f"{what}; <choose> picks among variants of an <object>; valid: "
+                                          f"{', '.join(objects) or 'none'}")
+            target = None
+        option_elements = reader.children_of(child, {"option": 1})
+        options = [o for o in (_option(reader, e, target, base) for e in option_elements) if o is not None]
+        # an option with errors was reported: the <choose>'s own attributes are still checked, on a stand-in
+        stand_in = (Option(),) if len(options) < len(option_elements) else ()
+        choice = reader.build(child, Choice, {"options": tuple(options) or stand_in, **_located(reader, child)})
+        if choice is not None and not stand_in:
+            choices.append(choice)
+    return reader.build(element, Randomize, {"poses": tuple(poses), "choices": tuple(choices),
+                                             **_located(reader, element)})
+
+
+def _option(reader: _Reader, element: etree._Element, target: etree._Element | None, base: Path) -> Option | None:
+    """One ``<option>``: its object attributes checked as the object ``target`` would take them (errors at the
+    option's line), its ``urdf``/``mesh`` files as an object's."""
+    reader.children_of(element, {})
+    valid = sorted((set(Object.model_fields) - _INTERNAL_FIELDS - {"name"}) | {"weight"})
+    attributes: dict[str, str] = {}
+    own: dict[str, Any] = {}
+    for key, value in element.attrib.items():
+        key = str(key)
+        if key == "weight":
+            own[key] = str(value)
+        elif key == "name":
+            reader.issue(element, key, "an option cannot rename its object; valid: " + ", ".join(valid))
+        elif key not in valid:
+            reader.issue(element, key, unknown("attribute", key, valid))
+        else:
+            attributes[key] = str(value)
+    if target is not None:
+        merged = with_option({str(k): str(v) for k, v in target.attrib.items()}, attributes)
+        try:
+            Object.model_validate(merged)
+        except ValidationError as e:
+            for err in e.errors():
+                field = error_field(err)
+                raw = merged.get(field) if field else None
+                text = message(Object, err, raw if isinstance(raw, str) else None)
+                if field in attributes:
+                    reader.issue(element, field, text)
+                else:
+                    reader.issue(element, None, f"<object name='{target.get('name')}'> with this option: {text}")
+    _check_files(reader, element, base, {})
+    try:
+        return Option(attributes=attributes, **own, **_located(reader, element))
+    except ValidationError as e:
+        for err in e.errors():
+            reader.issue(element, "weight", message(Option, err, own.get("weight")))
+        return None
 
 
 def _check_files(reader: _Reader, element: etree._Element, base: Path,

@@ -51,15 +51,16 @@ def test_world_features_are_announced(run: dict) -> None:
 
 def test_available_worlds_filters_and_sources(run: dict) -> None:
     """get_available_worlds lists worlds/ and --worlds with file URIs, descriptions and tags; a tags filter ALL
-    indoor+home keeps only cleanup, ANY arm+nothing only arm6; an unknown filter mode, a missing or remote additional
-    source are OPERATION_FAILED naming it, and continue_on_error answers OK with the problem in the message."""
+    indoor+home keeps only cleanup and cleanup_random, ANY arm+nothing only arm6; an unknown filter mode, a missing
+    or remote additional source are OPERATION_FAILED naming it, and continue_on_error answers OK with the problem in
+    the message."""
     listing = run["all"]
     assert listing["result"] == OK, listing
     assert {"cleanup", "arm6", "coretest"} <= set(names(listing))
     by_name = {w["name"]: w for w in listing["worlds"]}
     assert by_name["cleanup"]["uri"] == CLEANUP.as_uri() and by_name["coretest"]["uri"] == WORLD.as_uri()
     assert by_name["cleanup"]["tags"] == ["indoor", "home", "robocup"] and by_name["cleanup"]["description"]
-    assert names(run["filtered"]) == ["cleanup"] and names(run["any"]) == ["arm6"]
+    assert names(run["filtered"]) == ["cleanup", "cleanup_random"] and names(run["any"]) == ["arm6"]
     assert run["bad_mode"]["result"] == OPERATION_FAILED and "filter_mode 7" in run["bad_mode"]["message"]
     missing = run["missing_source"]
     assert missing["result"] == OPERATION_FAILED and "/no/such/worlds" in missing["message"]
