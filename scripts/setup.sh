@@ -27,7 +27,7 @@ if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
 else
   echo "setup: installing sigcore, its plugins and test tools into .venv (about 1 minute on a fresh machine)"
   "$V/python" -m pip install -q --disable-pip-version-check --upgrade pip setuptools wheel
-  pkgs=(-e ".[test]")
+  pkgs=(-e ".[test,ray]")
   for p in plugins/*/; do pkgs+=(-e "$p"); done
   "$V/python" -m pip install -q --disable-pip-version-check -c scripts/constraints.txt "${pkgs[@]}"
   if [ -z "${SIGCORE_NO_ROS:-}" ]; then

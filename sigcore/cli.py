@@ -395,6 +395,9 @@ def run(
     overwrite: Annotated[bool, typer.Option(
         "--overwrite", help="with --record: replace the recording in DIR if it exists")] = False,
     seed: Seed = None,
+    results: Annotated[Path | None, typer.Option(
+        "--results", metavar="FILE", help="write the run's results as JSON to FILE at its end (also when stopped by "
+        "a signal): figures, how it ended, the verdict, each feature's results (the referee's events)")] = None,
 ) -> None:
     """Run a world headless and print what ran. With a transport (ROS 2 by default) it runs at real time until
     stopped; Ctrl-C (SIGINT) or SIGTERM end it like a QUITTING request, with the results printed. Arguments after
@@ -405,6 +408,9 @@ def run(
 
     seed_value = _seed(seed)
     _check_pace(fast, realtime, factor)
+    if results is not None and not (results.parent.is_dir() and not results.is_dir()):
+        raise _fail([f"--results {results}: {'a folder' if results.is_dir() else 'its folder does not exist'}; valid: "
+                     "a file in an existing folder"])
     if paused and transport == "none" and not viewer:
         raise _fail(["--paused needs a transport or a viewer that can resume the simulation; drop --transport "
                      "none or add --viewer"])
@@ -511,10 +517,29 @@ def run(
     if bag is not None:
         state = f"stopped early: {bag.bag.failure}" if bag.bag.failure else "complete"
         out.print(f"  recording: {bag.path} ({bag.messages} messages; {state}); sigcore bag info {bag.path}")
+    if results is not None:
+        _write_results(results, {"world": sim.world.name, "world_file": str(world_file), "backend": backend,
+                                 "seed": seed_value, "exit_code": 3 if report.error is not None else
+                                 1 if report.outcome is False else 0, **report.as_dict()})
+        out.print(f"  results:  {results}")
     if report.error is not None:
         raise typer.Exit(3)  # the run could not go on (a transport or a bug), the report above says why
     if report.outcome is False:
         raise typer.Exit(1)  # the world's task failed (e.g. the referee's result is not 'succeeded')
+
+
+def _write_results(path: Path, data: dict[str, object]) -> None:
+    """``data`` as JSON in ``path``, whole or not at all (written beside it, then renamed)."""
+    import json
+    import os
+
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(json.dumps(data, indent=1, default=str) + "\n")
+        os.replace(tmp, path)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        err.print(f"--results {path}: cannot write it: {e}", markup=False, soft_wrap=True)
 
 
 @app.command()
@@ -747,6 +772,15 @@ def worlds_cmd(
 REPLAY_TOLERANCE = {"mujoco": 0.0, "bullet": 1e-6}
 """How far a replay's final poses may be from the recorded ones [m, and unit quaternion components]: MuJoCo is
 deterministic to the bit; PyBullet's tolerance is stated, not assumed."""
+
+
+def _eval_command() -> None:
+    from .cli_eval import eval_command
+
+    app.command(name="eval")(eval_command)
+
+
+_eval_command()
 
 
 @app.command()

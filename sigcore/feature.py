@@ -76,6 +76,12 @@ class Feature(ABC):
         """Lines printed as they are after the summaries at the end of a run (e.g. a score table); none by default."""
         return []
 
+    def results(self) -> dict[str, object]:
+        """What a program reading the run's results needs (``sigcore run --results FILE``, ``sigcore eval``):
+        JSON-able values only. By default :meth:`summary`; a feature adds what it keeps for people in its
+        :meth:`report` (e.g. the referee's events)."""
+        return self.summary()
+
     def outcome(self) -> bool | None:
         """Whether the world's task succeeded, for the exit code of ``sigcore run`` (1 if any feature says False);
         ``None``: no verdict (the default, or the task has not ended)."""

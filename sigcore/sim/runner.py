@@ -44,6 +44,7 @@ class RunReport:
         error: When ``stopped_by`` is ``"error"``: what raised (``Type: message``), from the transport, the
             backend or an observer no feature owns (a bug in sigcore or in a transport plugin); its traceback is
             logged. None otherwise.
+        results: What each feature gives a program (``Feature.results``), by feature name.
     """
 
     agents: dict[str, list[str]]
@@ -59,11 +60,24 @@ class RunReport:
     report_lines: list[str] = field(default_factory=list)
     outcome: bool | None = None
     error: str | None = None
+    results: dict[str, object] = field(default_factory=dict)
 
     @property
     def real_time_factor(self) -> float:
         """Simulated seconds per wall-clock second in this run."""
         return self.sim_time_run / self.wall_time if self.wall_time > 0 else float("inf")
+
+    def as_dict(self) -> dict[str, object]:
+        """The report as JSON-able values (``sigcore run --results FILE``): the figures, how the run ended, the
+        verdict, what failed, and each feature's :attr:`results`."""
+        return {"steps": self.steps, "sim_time": self.sim_time, "sim_time_run": self.sim_time_run,
+                "wall_time": self.wall_time, "real_time_factor": self.real_time_factor if self.wall_time > 0 else None,
+                "stopped_by": self.stopped_by, "error": self.error, "outcome": self.outcome,
+                "agents": self.agents,
+                "controller_failures": [{"agent": f.agent, "callback": f.callback, "time": f.time, "error": f.error}
+                                        for f in self.failures],
+                "feature_failures": [ff.line() for ff in self.feature_failures],
+                "features": self.results}
 
 
 def run(sim: Simulation, *, duration: float | None = None, steps: int | None = None,
@@ -123,10 +137,10 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
     for name, handle in sim.agents.items():
         kinds.setdefault(handle.kind, []).append(name)
     stopped_by = "error" if error is not None else (control.stop_reason or "request") if control.stop else None
-    summary, lines, outcome = sim.summary(), sim.report_lines(), sim.outcome()
+    summary, lines, outcome, results = sim.summary(), sim.report_lines(), sim.outcome(), sim.results()
     return RunReport(kinds, sim.elapsed_steps - start_step, sim.time, wall, list(sim.dispatch.failures), summary,
                      sim.elapsed_time - start_time, stopped_by, list(sim.feature_guard.failures),
-                     list(sim.dispatch.slow.values()), lines, outcome, error)
+                     list(sim.dispatch.slow.values()), lines, outcome, error, results)
 
 
 class _started:

@@ -959,6 +959,17 @@ class Simulation:
                 self.disable_feature(name, "summary", e)
         return summaries
 
+    def results(self) -> dict[str, Any]:
+        """What each feature gives a program at the end of a run (``Feature.results``; one that raises is disabled
+        and left out)."""
+        results = {}
+        for name, feature in self.features.items():
+            try:
+                results[name] = feature.results()
+            except USER_ERRORS as e:
+                self.disable_feature(name, "results", e)
+        return results
+
     def report_lines(self) -> list[str]:
         """The features' report lines (``Feature.report``), in world order; one whose ``report`` raises is disabled
         and left out."""

@@ -226,3 +226,11 @@ class Referee(Feature):
     def report(self) -> list[str]:
         """The final score table, one line per event, for the command line to print."""
         return report_lines(self)
+
+    def results(self) -> dict[str, object]:
+        """The summary and every event (time [s], kind, text, points, and the total after it)."""
+        events, total = [], 0
+        for e in self.events:
+            total += e.points
+            events.append({"time": e.time, "kind": e.kind, "text": e.text, "points": e.points, "score": total})
+        return {**self.summary(), "events": events}
