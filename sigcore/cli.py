@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from . import __version__, plugins
+from . import __version__, cli_linger, plugins
 from .errors import SigcoreError
 from .isolation import CALLBACK_BUDGET, BudgetError, CallbackBudget
 from .world import WorldError, parse_world
@@ -376,6 +376,10 @@ def run(
     viewer_host: ViewerHost = "127.0.0.1",
     viewer_port: ViewerPort = None,
     viewer_rate: ViewerRate = 30.0,
+    viewer_linger: Annotated[float | None, typer.Option(
+        "--viewer-linger", min=0, metavar="S", help="after the run, keep the viewer's page up (its last moment, the "
+        "result, the score table) at most S seconds, or until Enter, the page closed or Ctrl-C; default: until then "
+        "with a terminal, not at all without one; 0: never")] = None,
     video: Annotated[Path | None, typer.Option(
         "--video", metavar="OUT.mp4", help="render the run into an MP4 at the simulated pace (time and score in a "
         "corner)")] = None,
@@ -437,6 +441,10 @@ def run(
     recorder = _video(sim, video, video_camera, video_fps)
     bag = _record(sim, record, record_topics, ground_truth_rate, overwrite)
     viewer_obj = _viewer(viewer, viewer_host, viewer_port, viewer_rate)  # listening now: a taken port is exit 2
+    terminal = cli_linger.has_terminal()
+    linger_s = cli_linger.linger_seconds(viewer_linger, terminal)
+    if viewer_obj is not None:
+        viewer_obj.hold_at_end = linger_s != 0  # its page stays up after the run (cli_linger)
     total = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     show_progress = not quiet and total is not None
     t0 = time.perf_counter()
@@ -479,6 +487,8 @@ def run(
                          progress=progress,
                          progress_every=2.0 if not tty else 0.25, started=started, gate=gate)
     except KeyboardInterrupt as e:  # a second signal while stopping
+        if viewer_obj is not None:
+            viewer_obj.close()
         raise _fail([f"interrupted{f' ({e})' if str(e) else ''}: no results"], 130) from None
     finally:
         if recorder is not None:
@@ -522,6 +532,9 @@ def run(
                                  "seed": seed_value, "exit_code": 3 if report.error is not None else
                                  1 if report.outcome is False else 0, **report.as_dict()})
         out.print(f"  results:  {results}")
+    if viewer_obj is not None and viewer_obj.hold_at_end:
+        sys.stdout.flush()
+        cli_linger.linger(viewer_obj, report, linger_s, terminal, lambda line: err.print(line, soft_wrap=True))
     if report.error is not None:
         raise typer.Exit(3)  # the run could not go on (a transport or a bug), the report above says why
     if report.outcome is False:
@@ -653,18 +666,6 @@ def api(
     sim = _load(world_file, backend)
     entries = sim.api_entries()
     agent_topics = {p.topic for p in sim.publications.declared if p.agent}
-    per_agent: dict[str, str] = {}
-    print("agent API (one endpoint per agent of the listed kinds: <agent><suffix>)")
-    print(f"  {'suffix':<34} {'direction':<9} {'type':<28} {'from':<8} kinds: request -> response")
-    for entry in entries:
-        req = ", ".join(entry.request.model_fields) if entry.request else entry.ros_type
-        res = ", ".join(entry.response.model_fields) if entry.response else ""
-        agents = [a for a, h in sim.agents.items() if h.kind in entry.kinds and (
-            entry.direction != "publish" or entry.name_for(a) in agent_topics)]
-        for agent in agents:
-            per_agent[entry.name_for(agent)] = entry.ros_type
-        print(f"  {entry.suffix:<34} {entry.direction:<9} {entry.ros_type:<28} {entry.origin:<8} "
-              f"{','.join(sorted(entry.kinds))} ({len(agents)}): {req}" + (f" -> {res}" if res else ""))
     described: dict[str, str] = {}
     if transport != "none":
         try:
@@ -674,10 +675,23 @@ def api(
         except ImportError as e:
             err.print(f"transport '{transport}' cannot describe its endpoints here ({e}); listing the core's",
                       markup=False)
+    per_agent: dict[str, str] = {}
+    print("agent API (one endpoint per agent of the listed kinds: <agent><suffix>; in parentheses, how many agents "
+          "have it" + (f" with transport '{transport}'" if described else "") + ")")
+    print(f"  {'suffix':<34} {'direction':<9} {'type':<28} {'from':<8} kinds: request -> response")
+    for entry in entries:
+        req = ", ".join(entry.request.model_fields) if entry.request else entry.ros_type
+        res = ", ".join(entry.response.model_fields) if entry.response else ""
+        # the transport may leave some agents' endpoints out (ROS 2: sigros_agents)
+        agents = [a for a, h in sim.agents.items() if h.kind in entry.kinds and (
+            entry.direction != "publish" or entry.name_for(a) in agent_topics)
+            and (not described or entry.name_for(a) in described)]
+        for agent in agents:
+            per_agent[entry.name_for(agent)] = entry.ros_type
+        print(f"  {entry.suffix:<34} {entry.direction:<9} {entry.ros_type:<28} {entry.origin:<8} "
+              f"{','.join(sorted(entry.kinds))} ({len(agents)}): {req}" + (f" -> {res}" if res else ""))
     others = {p.topic: (p.full_type, f"{p.qos}, from {p.origin}") for p in sim.publications.declared
               if not p.agent}
-    if described:  # the transport may leave some agents' endpoints out (ROS 2: sigros_agents)
-        per_agent = {name: kind for name, kind in per_agent.items() if name in described}
     for name, kind in described.items():
         if name not in per_agent and name not in others:
             others[name] = (kind, f"transport {transport}")
@@ -770,7 +784,7 @@ def worlds_cmd(
 
 
 REPLAY_TOLERANCE = {"mujoco": 0.0, "bullet": 1e-6}
-"""How far a replay's final poses may be from the recorded ones [m, and unit quaternion components]: MuJoCo is
+"""How far a replay's poses may be from the recorded ones [m, and unit quaternion components]: MuJoCo is
 deterministic to the bit; PyBullet's tolerance is stated, not assumed."""
 
 
@@ -794,13 +808,16 @@ def replay(
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="no progress display")] = False,
 ) -> None:
     """Re-simulate a recorded run from its world and its input log, with no client attached, and compare every
-    body's pose at the end with the recorded ground truth (bit for bit on MuJoCo). Every command from outside is
+    recorded ground-truth frame with the replay at its step (bit for bit on MuJoCo; the first difference stops it,
+    naming the step, the entity and the difference) and the referee's score, events and result message by message
+    (exit 1 when something differs). Every command from outside is
     applied again (API calls, velocities, resets, entity states, spawns, deletes, entity information); a run that
     loaded or unloaded a world is refused before it runs. --until STEP stops there and hands the paused simulation
     to live clients, so a failed episode can be inspected where it went wrong."""
     from itertools import takewhile
 
-    from .record.replay import Replayer, ReplayError, compare, describe_inputs, load_recording, poses_now
+    from .record.replay import Replayer, ReplayError, describe_inputs, load_recording
+    from .record.verify import ReplayCheck
     from .sim import Simulation
     from .sim import run as run_sim
     from .sim.inputs import refusal
@@ -841,7 +858,10 @@ def replay(
     drawn = f", drawn with seed {rec.seed}" if rec.seed is not None and world.randomize is not None else ""
     out.print(f"sigcore {__version__}: replaying {path} (world '{sim.world.name}'{drawn}, backend '{backend}') to "
               f"step {target} of {final}; recorded commands: {kinds}")
-    replayer = Replayer(rec.inputs, until=target)
+    whole = until is None  # the commands of the last step came after it: applied when the replay stops there
+    replayer = Replayer(rec.inputs, until=None if whole else target, end=final if whole else None)
+    check = ReplayCheck(rec.truth, rec.topics, target, whole, REPLAY_TOLERANCE.get(backend, 1e-6), sim.dt)
+    check.attach(sim)
     api_log = logging.getLogger("sigcore.api")
     level = api_log.level
     api_log.setLevel(logging.ERROR)  # refusals were logged when the run was recorded: not again for each one
@@ -857,22 +877,18 @@ def replay(
                          progress=progress, progress_every=5.0)
     finally:
         api_log.setLevel(level)
+        check.finish(sim)
     error = report.error if report.error is not None else replayer.error
     if error is not None:
         raise _fail([f"sigcore replay: the replay stopped at step {sim.step_count}: {error}"], 3)
-    out.print(f"  replayed: {report.steps} steps, {replayer.applied} commands applied, wall {report.wall_time:.2f} s")
-    recorded = next((poses for step, poses in rec.truth if step == sim.step_count), None)
-    differs = False
-    if recorded is None:
-        out.print(f"  ground truth: none recorded at step {sim.step_count} (it is recorded at its rate and at the "
-                  "last step): not compared")
-    else:
-        equal, worst, where = compare(recorded, poses_now(sim))
-        tolerance = REPLAY_TOLERANCE.get(backend, 1e-6)
-        differs = not (equal or worst <= tolerance)
-        verdict = ("bitwise equal" if equal else f"largest difference {worst:.3g} at {where} "
-                   f"({'within' if not differs else 'beyond'} the tolerance {tolerance:g} of '{backend}')")
-        out.print(f"  ground truth at step {sim.step_count}: {len(recorded)} frames, {verdict}")
+    late = (f" ({replayer.after_end} of them after the last step, where the run applied them as it stopped)"
+            if replayer.after_end else "")
+    out.print(f"  replayed: {report.steps} steps, {replayer.applied} commands applied (of {len(rec.inputs)} "
+              f"recorded){late}, wall {report.wall_time:.2f} s", markup=False)
+    lines, reproduced = check.report(sim)
+    for line in lines:
+        out.print(f"  {line}", markup=False, soft_wrap=True)
+    differs = not reproduced
     if until is not None and handover is not None:
         sim.control.paused = True
 

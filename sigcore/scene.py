@@ -90,13 +90,44 @@ def entity_scene(world: World, entity: Entity, frame: FrameName) -> EntityScene:
                                                       _IDENTITY, entity.color),))
 
 
+Color = tuple[float, float, float, float]
+"""r, g, b, a in [0, 1]."""
+
+
+def _given_color(entity: Entity) -> Color | None:
+    """The world file's ``color`` of a URDF object when the file gives one: it replaces the URDF's colours."""
+    return entity.color if isinstance(entity, Object) and "color" in entity.model_fields_set else None
+
+
+def link_colors(world: World, entity: Entity) -> dict[str, Color]:
+    """The colour of each URDF link of a robot or a URDF object of ``world``, as the scene shows it.
+
+    The backends drop the URDFs' ``<visual>`` elements and their cameras render the collision geometry, so they
+    paint each link's collision geometry with this colour: the camera, the viewer and ``/sigcore/scene`` then show
+    one colour, from this module. It is the world file's ``color`` for an object that gives one, else the colour of
+    the link's first ``<visual>``.
+
+    Returns:
+        Colour by URDF link name; links with no visual are absent (paint them
+        :data:`~sigcore.world.visuals.DEFAULT_COLOR`); empty for shapes, meshes and humans.
+    """
+    if isinstance(entity, Human) or (isinstance(entity, Object) and entity.urdf is None):
+        return {}
+    document = world.urdf(entity.name)
+    given = _given_color(entity)
+    colors: dict[str, Color] = {}
+    for v in urdf_visuals(document.root, document.path.parent):
+        colors.setdefault(v.frame, given or v.color)
+    return colors
+
+
 def _urdf_object(world: World, obj: Object) -> tuple[Visual, ...]:
     """A URDF object's visuals in its entity frame (the root link's), joints at zero, scaled by ``obj.scale``;
     the world file's ``color`` replaces the URDF's colours when it is given."""
     document = world.urdf(obj.name)
     links = links_in_root(document.root, document.model.root)
     s = obj.scale
-    color = obj.color if "color" in obj.model_fields_set else None
+    color = _given_color(obj)
     out = []
     for v in urdf_visuals(document.root, document.path.parent):
         pos, quat = links[v.frame]

@@ -83,6 +83,22 @@ class Viewer(Transport):
         """
         raise ViewerError(f"viewer '{self.name}' cannot show recordings")
 
+    hold_at_end: bool = False
+    """Set before the run (``sigcore run --viewer-linger``): :meth:`stop` then leaves the page up, showing the run's
+    last moment, until :meth:`linger` ends (or :meth:`close`)."""
+
+    def linger(self, ended: str, lines: list[str], seconds: float | None, done: Callable[[], bool]) -> str:
+        """After a run stopped with :attr:`hold_at_end`: show how it ended (``ended``, one line) and the features'
+        report (``lines``: the referee's score table) beside the last moment, and keep the page up until ``done()``
+        is true, ``seconds`` [s of wall time] have passed (None: no limit), or the last browser showing it closed;
+        then :meth:`close`. Returns why it ended: ``"done"``, ``"time"``, ``"closed"`` or ``"gone"`` (the viewer
+        itself ended). Default: a viewer with nothing to keep up (``"gone"``)."""
+        self.close()
+        return "gone"
+
+    def close(self) -> None:
+        """End a viewer held open by :attr:`hold_at_end` after :meth:`stop` (nothing otherwise)."""
+
     def plan(self, sim: Simulation) -> list[Endpoint]:
         """A viewer creates no named endpoints."""
         return []

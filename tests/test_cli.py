@@ -65,11 +65,13 @@ def test_paused_without_transport_is_refused() -> None:
 
 
 def test_api_lists_every_agent() -> None:
-    """`sigcore api WORLD` lists each agent with its endpoint count, the other endpoints and the total."""
+    """`sigcore api WORLD` lists each agent with its endpoint count (a plain object none over ROS 2: the shared
+    /sigcore/sigros/<function> endpoints serve it), the other endpoints and the total."""
     r = sigcore("api", str(WORLD))
     assert r.returncode == 0
-    assert "bot (robot): 53 endpoints" in r.stdout and "7 agents, 322 agent endpoints, 34 others, 356 in all" in \
-        r.stdout
+    assert "bot (robot): 53 endpoints" in r.stdout and "cube (object): 0 endpoints" in r.stdout
+    assert "7 agents, 142 agent endpoints, 69 others, 211 in all" in r.stdout
+    assert "/sigcore/sigros/get_obj_position" in r.stdout
     assert "/tf_static" in r.stdout and "/bot/cmd_vel" in r.stdout
 
 

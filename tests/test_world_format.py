@@ -71,7 +71,7 @@ BAD_FILES = [
     Bad("duplicate_camera.xml", 5, 13, "camera", "name",
         ("duplicate name 'eye'", "first on line 4", "each camera of a robot needs its own name")),
     Bad("camera_near_far.xml", 4, 5, "camera", None, ("near 5 must be less than far 2",)),
-    Bad("camera_principal_outside.xml", 4, 5, "camera", None,
+    Bad("camera_principal_outside.xml", 4, 64, "camera", "principal",
         ("principal point (70, 20) lies outside the 64x48 image", "valid: 0 <= cx <= 63, 0 <= cy <= 47")),
     Bad("camera_bad_type.xml", 4, 41, "camera", "type", ("'stereo'", "rgb", "depth", "rgbd")),
     Bad("camera_frame_is_a_link.xml", 4, 13, "camera", "name",

@@ -29,6 +29,12 @@ def api_markdown(table: list[ApiEntry] | None = None) -> str:
         "`sigcore interfaces`). Every service response carries `success` and `message`: a refused request "
         "answers `success=false` and says what was wrong and what would be valid; nothing stops the simulation.",
         "",
+        "Over ROS 2, the agents that have `<agent><suffix>` endpoints are the `sigros_agents` setting's (default "
+        "`auto`: every robot, human and bodiless agent, and the objects with a controller); each subscribed or "
+        "service function whose request has `name` (the entity) is also one shared endpoint "
+        "`/sigcore/sigros/<suffix without its underscore>` that serves any agent by that `name` "
+        "(see [ros2.md](ros2.md), \"Many entities\").",
+        "",
         "Kinds: `robot`, `object`, `human`, `agent` (a bare agent with no body, which must name its target).",
         "",
     ]

@@ -18,17 +18,28 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from .domains import DomainLease
+from .domains import DOMAINS, DomainLease
 
-STATUSES = ("done", "timeout", "solution_crashed", "simulator_error")
+STATUSES = ("done", "timeout", "not_started", "solution_crashed", "simulator_error")
+"""How an episode ended: ``done`` (the simulator ended by itself: the task's end, its duration), ``timeout`` (the
+wall-time limit; both were stopped), ``not_started`` (the wall-time limit came while the simulation was still at
+t = 0, not one step taken: with ``--wait-for``, the solution never had the awaited topics' peers), ``solution_crashed``
+(the solution exited non-zero while the simulator ran or waited; the simulator was stopped), ``simulator_error`` (the
+simulator failed or left no results)."""
+
 INTERRUPTED = "interrupted"
 """The status of an episode the evaluation stopped (Ctrl-C): not recorded, run again by ``--resume``."""
-"""How an episode ended: ``done`` (the simulator ended by itself: the task's end, its duration), ``timeout`` (the
-wall-time limit; both were stopped), ``solution_crashed`` (the solution exited non-zero while the simulation ran;
-the simulator was stopped), ``simulator_error`` (the simulator failed or left no results)."""
+
+SIM_STOP = signal.SIGTERM
+"""The signal that stops a simulator: during its run ``sigcore run`` takes it as SIGINT (it stops and writes its
+results); while Python is still starting (importing), its default action ends the process without the traceback a
+SIGINT (``KeyboardInterrupt``) would print there."""
+
+SOLUTION_STOP = signal.SIGINT
+"""The signal that stops a solution (as Ctrl-C would: ``ros2 launch`` and rclpy nodes end cleanly on it)."""
 
 STOP_GRACE = 10.0
-"""Wall time a stopped process group has to end after SIGINT before it is killed [s]."""
+"""Wall time a stopped process group has to end after its stop signal before it is killed [s]."""
 
 POLL = 0.1
 """How often the processes are looked at [s]."""
@@ -54,6 +65,7 @@ class EpisodeSpec:
         python: The Python that runs ``sigcore`` (the driver's; on Ray, the worker's when None).
         duration: The simulator's ``--duration``: at most this much simulated time [s] (the task's end, e.g. the
             referee's time limit, usually comes first).
+        domains: The ``ROS_DOMAIN_ID`` range the episode takes its domain from, ``(LOW, HIGH)``, both included.
     """
 
     index: int
@@ -69,6 +81,7 @@ class EpisodeSpec:
     cwd: str | None = None
     python: str | None = None
     duration: float = 3600.0
+    domains: tuple[int, int] = (DOMAINS.start, DOMAINS.stop - 1)
 
     @property
     def folder(self) -> Path:
@@ -132,26 +145,32 @@ def run_episode(spec: EpisodeSpec, stop: threading.Event | None = None) -> Episo
     folder.mkdir(parents=True, exist_ok=True)
     results = folder / "result.json"
     results.unlink(missing_ok=True)
-    with DomainLease() as domain:
+    with DomainLease(range(spec.domains[0], spec.domains[1] + 1)) as domain:
         env = {**os.environ, "ROS_DOMAIN_ID": str(domain), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
                "PYTHONUNBUFFERED": "1", "SIGCORE_EPISODE": str(spec.index), "SIGCORE_SEED": str(spec.seed)}
         t0 = time.monotonic()
         sim = solution = None
+        status, reason = INTERRUPTED, "the evaluation was interrupted"
         try:
             sim = _start(_sim_command(spec, results), env, folder / "sim.log", None)
             if spec.solution is not None:
                 solution = _start(["/bin/sh", "-c", spec.solution], env, folder / "solution.log", spec.cwd)
             status, reason = _watch(sim, solution, spec.timeout, t0, stop)
         finally:
-            for proc in (solution, sim):
-                if proc is not None:
-                    _stop(proc)
+            if solution is not None:
+                _stop(solution, SOLUTION_STOP)
+            if sim is not None and sim.poll() is None:
+                stopped = time.monotonic() - t0
+                _stop(sim, SIM_STOP)
+                _note_stop(folder / "sim.log", sim, stopped, reason)
+            elif sim is not None:
+                _stop(sim, SIM_STOP)  # what is left of its group
         wall = time.monotonic() - t0
     assert sim is not None
     row = EpisodeRow(spec.index, spec.seed, status, False, wall_time=round(wall, 3), sim_exit=_code(sim),
                      solution_exit=_code(solution) if solution is not None else None, domain=domain, reason=reason,
                      folder=str(folder))
-    _read_results(row, results)
+    _read_results(row, results, spec)
     return row
 
 
@@ -185,17 +204,18 @@ def _watch(sim: subprocess.Popen[bytes], solution: subprocess.Popen[bytes] | Non
         if sim.poll() is not None:
             return "done", ""
         if solution is not None and solution.poll() not in (None, 0):
-            return "solution_crashed", f"the solution exited {solution.returncode} while the simulation ran"
+            return "solution_crashed", f"the solution exited {solution.returncode}"
         if time.monotonic() - t0 > timeout:
             return "timeout", f"not ended within {timeout:g} s of wall time"
         time.sleep(POLL)
 
 
-def _stop(proc: subprocess.Popen[bytes]) -> None:
-    """End ``proc``'s whole process group: SIGINT (the simulator writes its results), then SIGKILL."""
+def _stop(proc: subprocess.Popen[bytes], sig: signal.Signals) -> None:
+    """End ``proc``'s whole process group: ``sig`` (the simulator writes its results), then SIGKILL for what is left
+    after :data:`STOP_GRACE` s."""
     try:
         if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
+            os.killpg(proc.pid, sig)
             try:
                 proc.wait(timeout=STOP_GRACE)
             except subprocess.TimeoutExpired:
@@ -206,22 +226,51 @@ def _stop(proc: subprocess.Popen[bytes]) -> None:
     proc.wait()
 
 
+def _note_stop(log: Path, sim: subprocess.Popen[bytes], at: float, why: str) -> None:
+    """One line at the end of ``sim.log`` on why and how the evaluation stopped the simulator."""
+    code = sim.returncode
+    how = ("it was still starting (no results)" if code == -SIM_STOP else
+           f"it was killed (SIGKILL), still running {STOP_GRACE:g} s later" if code == -signal.SIGKILL else
+           f"it ended its run and exited {code}")
+    try:
+        with open(log, "a") as f:
+            f.write(f"sigcore eval: stopped the simulator ({SIM_STOP.name}) {at:.1f} s into the episode: {why}; "
+                    f"{how}\n")
+    except OSError:
+        pass
+
+
 def _code(proc: subprocess.Popen[bytes]) -> int | None:
     """The exit code; None when a signal ended the process."""
     code = proc.returncode
     return code if code is not None and code >= 0 else None
 
 
-def _read_results(row: EpisodeRow, path: Path) -> None:
-    """Fill ``row`` from the simulator's ``--results`` file; a missing or unreadable one is a simulator error."""
+def _read_results(row: EpisodeRow, path: Path, spec: EpisodeSpec) -> None:
+    """Fill ``row`` from the simulator's ``--results`` file; a missing or unreadable one is a simulator error; a
+    timed-out episode whose simulation took no step is ``not_started``."""
     try:
         data = json.loads(path.read_text())
     except (OSError, ValueError) as e:
+        if row.status == "solution_crashed":
+            row.reason += " while the simulator was starting (no results)"
+        elif row.status == "timeout":
+            row.reason += "; the simulator left no results (see sim.log)"
         if row.status == "done":
             row.status, row.reason = "simulator_error", (f"no results ({e.__class__.__name__}); exit code "
                                                           f"{row.sim_exit}; see sim.log")
         return
     row.sim_time = data.get("sim_time_run")
+    if data.get("steps") == 0:
+        if row.status == "timeout":
+            row.status = "not_started"
+            row.reason = (f"the simulation was still at t = 0 after --timeout {spec.timeout:g} s: " + (
+                f"it waited for --wait-for {' '.join(spec.wait_for)}, whose peers the solution never had (sim.log "
+                "names the ones missing)" if spec.wait_for else "paused, and nothing played or stepped it"))
+        elif row.status == "solution_crashed":
+            row.reason += " before the simulation left t = 0"
+    elif row.status == "solution_crashed":
+        row.reason += f" while the simulation ran (at t = {data.get('sim_time', 0):.2f} s)"
     if row.status == "done" and data.get("exit_code") == 3:
         row.status, row.reason = "simulator_error", str(data.get("error"))
     elif row.status == "done" and row.sim_exit not in (0, 1):

@@ -8,9 +8,10 @@ import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from .domains import DOMAINS
 from .episode import EpisodeRow, EpisodeSpec
 from .exceptions import EvalError
-from .results import EpisodeLog
+from .results import EpisodeLog, count
 
 SAME = ("world", "seed", "solution", "controllers", "backend")
 """Settings a resumed evaluation must share with the one it goes on with (the rest may change)."""
@@ -32,6 +33,7 @@ class Settings:
         wait_for: Topics the simulator waits for.
         cwd: The solution's working folder.
         duration: At most this much simulated time per episode [s].
+        domains: The ``ROS_DOMAIN_ID`` range of the episodes, ``(LOW, HIGH)``, both included.
     """
 
     world: str
@@ -45,12 +47,13 @@ class Settings:
     wait_for: tuple[str, ...]
     cwd: str
     duration: float = 3600.0
+    domains: tuple[int, int] = (DOMAINS.start, DOMAINS.stop - 1)
 
     def spec(self, index: int, out: Path, python: str | None) -> EpisodeSpec:
         """Episode ``index``."""
         return EpisodeSpec(index, self.seed + index, self.world, str(out), self.solution, self.controllers,
                            self.backend, self.timeout, self.pace, self.wait_for, self.cwd, python,
-                           self.duration)
+                           self.duration, self.domains)
 
     def as_dict(self) -> dict[str, object]:
         """JSON-able values."""
@@ -69,8 +72,8 @@ def prepare(out: Path, settings: Settings, resume: bool) -> list[EpisodeRow]:
     saved = out / "eval.json"
     rows = log.read()
     if rows and not resume:
-        raise EvalError(f"{out} holds {len(rows)} episodes of an evaluation already; valid: --resume to go on with "
-                        "it, or another --out folder")
+        raise EvalError(f"{out} holds {count(len(rows), 'episode')} of an evaluation already; valid: --resume to go "
+                        "on with it, or another --out folder")
     if resume and saved.exists():
         before = json.loads(saved.read_text())
         now = settings.as_dict()

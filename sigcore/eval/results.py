@@ -8,6 +8,7 @@ import csv
 import json
 import math
 import os
+import statistics
 from dataclasses import fields
 from pathlib import Path
 
@@ -96,25 +97,52 @@ def mean_interval(values: list[float]) -> tuple[float, float] | None:
     return mean, t * sd / math.sqrt(n)
 
 
+def count(n: int, noun: str) -> str:
+    """``1 episode``, ``2 episodes``: ``n`` and ``noun``, plural unless ``n`` is 1."""
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
+def never_ran(row: EpisodeRow) -> bool:
+    """Whether the episode's simulation never left t = 0 (``not_started``, or a solution that crashed before the
+    simulation played): its score says nothing of the solution's work and is left out of the mean."""
+    return row.status == "not_started" or row.sim_time == 0
+
+
 def summarize(rows: list[EpisodeRow], planned: int) -> dict[str, object]:
-    """The summary of ``rows``: counts, success rate (Wilson 95 %), mean score (t 95 %), mean simulated and wall
-    time, failures by kind and the task's results by kind."""
+    """The summary of ``rows``.
+
+    Every episode counts in the success rate (one that never started did not succeed). The score's statistics are
+    over the episodes with a score whose simulation ran (left t = 0); ``score_excluded`` counts the others.
+
+    Returns:
+        ``episodes``, ``planned``, ``succeeded``; ``success_rate`` [0-1] and ``success_interval_95`` (Wilson,
+        ``{"low", "high"}``); ``score_mean`` with ``score_interval_95`` (Student's t, ``{"low", "high"}``),
+        ``score_median``, ``score_min``, ``score_max``, ``scored_episodes`` (how many are in them) and
+        ``score_excluded`` (``never_ran``: never left t = 0; ``no_score``: no score in the results); the mean
+        simulated time (of the episodes that ran) and wall time [s]; ``failures`` (episodes by status other than
+        ``done``) and ``results`` (episodes by the task's result).
+    """
     n = len(rows)
     wins = sum(r.success for r in rows)
     low, high = wilson(wins, n)
-    scores = [r.score for r in rows if r.score is not None]
+    scores = [r.score for r in rows if r.score is not None and not never_ran(r)]
     score = mean_interval(scores)
     walls = mean_interval([r.wall_time for r in rows])
-    sims = mean_interval([r.sim_time for r in rows if r.sim_time is not None])
+    sims = mean_interval([r.sim_time for r in rows if r.sim_time is not None and not never_ran(r)])
     results: dict[str, int] = {}
     for r in rows:
         if r.result:
             results[r.result] = results.get(r.result, 0) + 1
     return {
         "episodes": n, "planned": planned, "succeeded": wins,
-        "success_rate": wins / n if n else None, "success_interval_95": [low, high],
-        "score_mean": score[0] if score else None, "score_interval_95": score[1] if score else None,
+        "success_rate": wins / n if n else None, "success_interval_95": {"low": low, "high": high},
+        "score_mean": score[0] if score else None,
+        "score_interval_95": {"low": score[0] - score[1], "high": score[0] + score[1]} if score else None,
+        "score_median": statistics.median(scores) if scores else None,
+        "score_min": min(scores) if scores else None, "score_max": max(scores) if scores else None,
         "scored_episodes": len(scores),
+        "score_excluded": {"never_ran": sum(r.score is not None and never_ran(r) for r in rows),
+                           "no_score": sum(r.score is None for r in rows)},
         "sim_time_mean": sims[0] if sims else None, "wall_time_mean": walls[0] if walls else None,
         "failures": {kind: sum(r.status == kind for r in rows) for kind in STATUSES if kind != "done"},
         "results": results,

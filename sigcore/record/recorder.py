@@ -10,7 +10,9 @@ What goes in (all of it, or the topics ``--record-topics`` regexes select):
   ``/sigcore/ready``), handed over already serialized (:meth:`sigcore.publish.PublicationSink.raw`);
 - the ground truth, always: ``/sigcore/ground_truth`` (``tf2_msgs/msg/TFMessage``), the pose in ``world`` of every
   frame the scene has (``ground_truth/<entity>`` for objects and humans, ``ground_truth/<robot>/<link>`` for each
-  link of a robot), at ``ground_truth_rate`` of simulated time, at the start and at the last step;
+  link of a robot), at ``ground_truth_rate`` of simulated time (after a step's physics, before the commands applied
+  before the next step), at the start and at the last step (when the recording closes: after the commands the run
+  applied after its last step; a second message of that step when one was written before them);
 - the input log, always: ``/sigcore/inputs`` (``std_msgs/msg/String``), one JSON object per command applied from
   outside (:mod:`sigcore.sim.inputs`), logged at the time of the step it took effect, which ``sigcore replay`` applies
   again;
@@ -107,6 +109,7 @@ class Recorder(PublicationSink):
         self._dt_ns = round(sim.dt * 1e9)
         self._every = max(1, round(1.0 / (ground_truth_rate * sim.dt))) if ground_truth_rate > 0 else 0
         self._last_truth = -1
+        self._input_since_truth = False
         self._frames: tuple[tuple[str, str | None], ...] = ()  # a tuple: the backend keeps its indices
         self._tf: _TfLayout | None = None
         self._scene_version = -1
@@ -176,6 +179,7 @@ class Recorder(PublicationSink):
     def _on_input(self, item: Input) -> None:
         """One command applied from outside: ``/sigcore/inputs``, logged at the time of its step."""
         topic = self._topic(INPUTS, "std_msgs/msg/String", OFFERED["events"])
+        self._input_since_truth = True
         if topic is not None:
             text = json.dumps(item.to_json(), separators=(",", ":"))
             self.bag.write(topic, item.step * self._dt_ns, self._serializer.serialize("std_msgs/msg/String",
@@ -186,13 +190,15 @@ class Recorder(PublicationSink):
         if self._every and sim.step_count % self._every == 0:
             self._write_truth()
 
-    def _write_truth(self) -> None:
-        """``/sigcore/ground_truth`` now: every frame of the scene in ``world``, read with one ``get_poses``."""
+    def _write_truth(self, closing: bool = False) -> None:
+        """``/sigcore/ground_truth`` now: every frame of the scene in ``world``, read with one ``get_poses``. Once per
+        step; when ``closing``, again if commands were applied since this step's message (a replay compares each
+        message where it was written)."""
         sim = self.sim
         if not self.bag.active or not sim.loaded:
             return
         step = sim.step_count
-        if step == self._last_truth:
+        if step == self._last_truth and not (closing and self._input_since_truth):
             return
         scene = sim.scene
         if scene.version != self._scene_version or scene is not self._scene or self._tf is None:
@@ -206,6 +212,7 @@ class Recorder(PublicationSink):
             return
         poses = sim.backend.get_poses(self._frames) if self._frames else None
         self._last_truth = step
+        self._input_since_truth = False
         self.bag.write(topic, sim.stamp_ns, self._tf.pack(sim.stamp_ns, poses))
 
     # ------------------------------------------------------------------ files
@@ -231,12 +238,13 @@ class Recorder(PublicationSink):
 
     # ------------------------------------------------------------------ the end
     def close(self) -> None:
-        """The last step's ground truth, then the bag closed (``metadata.yaml`` written). Idempotent."""
+        """The last step's ground truth (after the commands applied after it), then the bag closed
+        (``metadata.yaml`` written). Idempotent."""
         if self.closed:
             return
         self.closed = True
         try:
-            self._write_truth()
+            self._write_truth(closing=True)
         finally:
             self.sim.publications.disconnect(self)
             self.sim.remove_step_observer(self._on_step)
@@ -321,6 +329,8 @@ class _TfLayout:
             buf.extend(b"\x00" * 56)
         self._n = len(children)
         self._length = len(buf)
+        self.length = self._length
+        """The message's size [bytes]."""
         buf.extend(b"\x00" * (-(len(buf) - 4) % 8))  # whole float64 words after the header, for the views below
         self._buf = buf
         # every stamp is 4-aligned and every pose 8-aligned after the 4-byte header: numpy views write them at once
@@ -331,6 +341,9 @@ class _TfLayout:
         self._words = (((np.array(self._values, dtype=np.int64) - 4) // 8)[:, None] + np.arange(7)).ravel()
         # from a row-major (n, 7) array of backend poses to the transforms' numbers, in one flat indexing
         self._source = (np.arange(len(children))[:, None] * 7 + np.array(_ROS_ORDER)).ravel()
+        self.words = self._words
+        """The indices, in the message's float64 words after its 4-byte header, of each transform's seven numbers
+        (x, y, z, qx, qy, qz, qw), transform after transform."""
 
     def pack(self, stamp_ns: int, poses: Any) -> bytes:
         """The message stamped ``stamp_ns`` with ``poses`` ((n, 7): x, y, z, qw, qx, qy, qz per child)."""

@@ -65,6 +65,8 @@ class WheelOdometry:
             wl *= 1.0 + self._rng.normal(0.0, self.noise)
             wr *= 1.0 + self._rng.normal(0.0, self.noise)
         v, w = d.body_velocity(wl, wr)  # with the geometry now in use (``_setWheel`` may have changed it)
+        if not (math.isfinite(v) and math.isfinite(w)):
+            v = w = 0.0  # the physics diverged (a wheel speed is infinite): hold the pose, never end the run
         s = self.state
         mid = s.yaw + w * self.dt / 2.0
         s.x += v * math.cos(mid) * self.dt

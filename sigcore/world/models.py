@@ -23,6 +23,7 @@ from pydantic import (
 )
 
 from .exceptions import FieldError
+from .limits import MAX_ANGLE, MAX_COORDINATE, MAX_LIDAR_RANGE, MAX_SIZE, check_magnitudes
 from .randomization import Located, Randomize
 from .urdf import UrdfDocument, UrdfFiles
 
@@ -32,7 +33,6 @@ NAME_PATTERN = r"^[A-Za-z][A-Za-z0-9_]*$"
 
 MAX_GRAVITY = 1000.0
 """Longest gravity vector a world may ask for [m/s^2] (about 100 g); beyond it the engines diverge."""
-
 
 def _numbers(count: int | None) -> BeforeValidator:
     def parse(value: object) -> object:
@@ -148,6 +148,8 @@ class Pose(_Model):
                 raise ValueError(f"{value!r} is not numbers separated by spaces") from None
             if not all(math.isfinite(n) for n in numbers):
                 raise ValueError(f"numbers must be finite, got {value!r}")
+            check_magnitudes(tuple(numbers[:3]), MAX_COORDINATE, "m", "x, y, z")
+            check_magnitudes(tuple(numbers[3:]), MAX_ANGLE, "rad", "roll, pitch, yaw")
             rpy = (numbers[3], numbers[4], numbers[5]) if len(numbers) == 6 else (0.0, 0.0, 0.0)
             return cls(xyz=(numbers[0], numbers[1], numbers[2]), rpy=rpy)
         return value
@@ -175,8 +177,8 @@ class Drive(_Model):
     right: str = Field(description="right wheel joint name")
     radius: float = Field(gt=0, le=5, description="wheel radius in [m]")
     separation: float = Field(gt=0, le=20, description="distance between the wheels in [m]")
-    max_wheel_velocity: float = Field(default=20.0, gt=0, description="wheel speed limit in [rad/s]")
-    max_torque: float = Field(default=20.0, gt=0, description="wheel motor torque limit in [N m]")
+    max_wheel_velocity: float = Field(default=20.0, gt=0, le=1000, description="wheel speed limit in [rad/s]")
+    max_torque: float = Field(default=20.0, gt=0, le=100_000, description="wheel motor torque limit in [N m]")
     cmd_vel_timeout: float = Field(default=0.5, ge=0, le=3600,
                                    description="the wheels stop when no cmd_vel came for this long (simulated "
                                                "time) in [s]; 0: never")
@@ -204,9 +206,9 @@ class Lidar(_Model):
     @field_validator("range")
     @classmethod
     def _range(cls, v: tuple[float, float]) -> tuple[float, float]:
-        if not 0 <= v[0] < v[1]:
-            raise ValueError(f"min {v[0]:g} and max {v[1]:g} do not satisfy 0 <= min < max; "
-                             "valid: 'min max' [m], e.g. '0.05 10'")
+        if not 0 <= v[0] < v[1] <= MAX_LIDAR_RANGE:
+            raise ValueError(f"min {v[0]:g} and max {v[1]:g} do not satisfy 0 <= min < max <= "
+                             f"{MAX_LIDAR_RANGE:g}; valid: 'min max' [m], e.g. '0.05 10'")
         return v
 
 
@@ -244,8 +246,9 @@ class Camera(_Model):
         if self.principal is not None:
             cx, cy = self.principal
             if not (0 <= cx <= self.width - 1 and 0 <= cy <= self.height - 1):
-                raise ValueError(f"principal point ({cx:g}, {cy:g}) lies outside the {self.width}x{self.height} "
-                                 f"image; valid: 0 <= cx <= {self.width - 1}, 0 <= cy <= {self.height - 1}")
+                raise FieldError("principal", f"principal point ({cx:g}, {cy:g}) lies outside the "
+                                              f"{self.width}x{self.height} image; valid: 0 <= cx <= "
+                                              f"{self.width - 1}, 0 <= cy <= {self.height - 1}")
         return self
 
     @property
@@ -287,9 +290,9 @@ class Arm(_Model):
 class Gains(_Model):
     """``<gains>``: servo gains of the joint actuators (all non-wheel joints)."""
 
-    kp: float = Field(default=200.0, gt=0, description="position gain in [N m/rad]")
-    kv: float = Field(default=10.0, ge=0, description="damping in [N m s/rad]")
-    max_torque: float = Field(default=100.0, gt=0, description="actuator torque limit in [N m]")
+    kp: float = Field(default=200.0, gt=0, le=100_000, description="position gain in [N m/rad]")
+    kv: float = Field(default=10.0, ge=0, le=10_000, description="damping in [N m s/rad]")
+    max_torque: float = Field(default=100.0, gt=0, le=100_000, description="actuator torque limit in [N m]")
 
 
 class Robot(_Model):
@@ -363,9 +366,9 @@ class Object(_Model):
             if len(self.size) != _SIZE_COUNT[self.shape]:
                 raise FieldError("size", f"expected {_SIZE_COUNT[self.shape]} numbers for a {self.shape}, "
                                          f"got {len(self.size)}; valid: {_SIZE_HELP[self.shape]} [m]")
-            if any(s <= 0 for s in self.size):
+            if any(not 0 < s <= MAX_SIZE for s in self.size):
                 got = " ".join(f"{s:g}" for s in self.size)
-                raise FieldError("size", f"sizes must be > 0 [m], got {got}")
+                raise FieldError("size", f"sizes {got} are out of range; valid: each > 0 and <= {MAX_SIZE:g} [m]")
             if "scale" in self.model_fields_set:
                 raise FieldError("scale", f"'scale' is only for 'mesh' and 'urdf' objects; a {self.shape} is "
                                           f"sized by 'size' ({_SIZE_HELP[self.shape]})")
@@ -418,6 +421,8 @@ class NamedPose(_Model):
             got = " ".join(f"{c:g}" for c in v)
             raise ValueError(f"{got} is not min < max on every axis; valid: 'min_x min_y min_z max_x max_y max_z' "
                              "[m], e.g. '-0.3 -0.3 0 0.3 0.3 1.5'")
+        if v is not None:
+            check_magnitudes(v, MAX_COORDINATE, "m", "offsets")
         return v
 
 

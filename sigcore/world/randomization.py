@@ -15,6 +15,7 @@ from typing import Annotated
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from .exceptions import FieldError
+from .limits import MAX_ANGLE, MAX_COORDINATE, check_magnitudes
 
 DEFAULT_ATTEMPTS = 200
 """Draws per entity before :func:`sigcore.world.randomize.sample` gives up."""
@@ -23,8 +24,9 @@ DEFAULT_CLEARANCE = 0.02
 """Default gap between a drawn entity's footprint and the others' [m]."""
 
 
-def _numbers(count: int, help_: str) -> BeforeValidator:
-    """Split ``"a b c"`` into ``count`` finite floats; the message says what was expected (``help_``)."""
+def _numbers(count: int, help_: str, limit: float, unit: str, what: str) -> BeforeValidator:
+    """Split ``"a b c"`` into ``count`` finite floats within ``±limit`` [``unit``] (``what`` they are); the message
+    says what was expected (``help_``)."""
 
     def parse(value: object) -> object:
         if not isinstance(value, str):
@@ -37,6 +39,7 @@ def _numbers(count: int, help_: str) -> BeforeValidator:
             raise ValueError(f"expected {count} numbers, got {len(numbers)} ({value!r}); valid: {help_}")
         if not all(math.isfinite(n) for n in numbers):
             raise ValueError(f"numbers must be finite, got {value!r}; valid: {help_}")
+        check_magnitudes(numbers, limit, unit, what)
         return numbers
 
     return BeforeValidator(parse)
@@ -49,8 +52,8 @@ def _words(value: object) -> object:
 _REGION_HELP = "'x0 y0 x1 y1' [m] with x0 <= x1 and y0 <= y1"
 _YAW_HELP = "'lo hi' [rad] with lo <= hi"
 
-Region = Annotated[tuple[float, float, float, float], _numbers(4, _REGION_HELP)]
-YawRange = Annotated[tuple[float, float], _numbers(2, _YAW_HELP)]
+Region = Annotated[tuple[float, float, float, float], _numbers(4, _REGION_HELP, MAX_COORDINATE, "m", "coordinates")]
+YawRange = Annotated[tuple[float, float], _numbers(2, _YAW_HELP, MAX_ANGLE, "rad", "angles")]
 Names = Annotated[tuple[str, ...], BeforeValidator(_words)]
 
 
@@ -78,8 +81,8 @@ class RandomPose(Located):
                                                             "in [m]")
     on: Names | None = Field(default=None, description="entities whose top face it is put on (one drawn per try)")
     area: str | None = Field(default=None, description="a <named_pose> with bounds: its x/y box is the region")
-    z: float | None = Field(default=None, description="height of its position in [m]; default: the file's (not "
-                                                      "with 'on')")
+    z: float | None = Field(default=None, ge=-MAX_COORDINATE, le=MAX_COORDINATE,
+                            description="height of its position in [m]; default: the file's (not with 'on')")
     yaw: YawRange | None = Field(default=None, description="'lo hi': its yaw is drawn in this range [rad]; default: "
                                                            "the file's orientation")
     clearance: float = Field(default=DEFAULT_CLEARANCE, ge=0, le=10,

@@ -1,5 +1,6 @@
 """sigcore eval without ROS 2: the summary's statistics, the episode log, in-process controllers over seeded episodes
-(the same seeds, the same results), an interrupted evaluation resumed, refusals."""
+(the same seeds, the same results), an interrupted evaluation resumed, refusals, the domain range, --min-success and
+the ETA."""
 
 from __future__ import annotations
 
@@ -15,15 +16,29 @@ from pathlib import Path
 
 import pytest
 
-from sigcore.eval import EpisodeLog, EpisodeRow, EvalError, Settings, mean_interval, prepare, summarize, wilson
+from sigcore.eval import (
+    ENV,
+    EpisodeLog,
+    EpisodeRow,
+    Eta,
+    EvalError,
+    Settings,
+    mean_interval,
+    parse_domains,
+    prepare,
+    summarize,
+    wilson,
+)
+from sigcore.eval.domains import DomainLease
 
 ROOT = Path(__file__).parent.parent.parent
 WORLD = ROOT / "worlds" / "cleanup_random.xml"
 SIGCORE = [sys.executable, "-m", "sigcore"]
 
 
-def _eval(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*SIGCORE, "eval", *args], capture_output=True, text=True, timeout=timeout, cwd=ROOT)
+def _eval(*args: str, timeout: float = 300, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([*SIGCORE, "eval", *args], capture_output=True, text=True, timeout=timeout, cwd=ROOT,
+                          env={**os.environ, **(env or {})})
 
 
 def _rows(folder: Path) -> list[dict[str, str]]:
@@ -50,21 +65,32 @@ def test_mean_interval_uses_students_t() -> None:
 
 
 def test_the_summary_counts_failures_by_kind(tmp_path: Path) -> None:
-    """Rows written to episodes.csv read back equal; the summary counts successes, failures by kind and results."""
+    """Rows written to episodes.csv read back equal; the summary counts successes, failures by kind and results;
+    every interval is {low, high}; the score's mean, median, min and max leave out (and count) the episodes that never
+    left t = 0 (not started, or crashed before) and those without a score, while the success rate counts them all."""
     rows = [EpisodeRow(0, 0, "done", True, "succeeded", 3150.0, "grasp:3", 90.0, 40.0, 0, 0, 120),
             EpisodeRow(1, 1, "timeout", False, "running", 1050.0, "grasp:1", 30.0, 60.0, None, None, 121,
                        reason="not ended"),
             EpisodeRow(2, 2, "solution_crashed", False, "running", 0.0, "", 2.0, 3.0, 0, 3, 122),
-            EpisodeRow(3, 3, "simulator_error", False, "", None, "", None, 1.0, 2, None, 123)]
+            EpisodeRow(3, 3, "simulator_error", False, "", None, "", None, 1.0, 2, None, 123),
+            EpisodeRow(4, 4, "not_started", False, "running", 0.0, "", 0.0, 600.0, 0, None, 124),
+            EpisodeRow(5, 5, "solution_crashed", False, "running", 0.0, "", 0.0, 2.0, 0, 1, 125)]
     log = EpisodeLog(tmp_path)
     for row in rows:
         log.append(row)
     assert log.read() == rows
-    s = summarize(log.read(), 5)
-    assert s["episodes"] == 4 and s["planned"] == 5 and s["succeeded"] == 1 and s["success_rate"] == 0.25
-    assert s["failures"] == {"timeout": 1, "solution_crashed": 1, "simulator_error": 1}
-    assert s["results"] == {"succeeded": 1, "running": 2}
+    s = summarize(log.read(), 7)
+    assert s["episodes"] == 6 and s["planned"] == 7 and s["succeeded"] == 1 and s["success_rate"] == 1 / 6
+    assert s["failures"] == {"timeout": 1, "not_started": 1, "solution_crashed": 2, "simulator_error": 1}
+    assert s["results"] == {"succeeded": 1, "running": 4}
     assert s["scored_episodes"] == 3 and s["score_mean"] == pytest.approx((3150 + 1050) / 3)
+    assert s["score_excluded"] == {"never_ran": 2, "no_score": 1}
+    assert (s["score_median"], s["score_min"], s["score_max"]) == (1050.0, 0.0, 3150.0)
+    half = 4.303 * math.sqrt(((3150 - 1400) ** 2 + (1050 - 1400) ** 2 + 1400 ** 2) / 2) / math.sqrt(3)
+    assert s["score_interval_95"] == {"low": pytest.approx(1400 - half), "high": pytest.approx(1400 + half)}
+    low, high = wilson(1, 6)
+    assert s["success_interval_95"] == {"low": low, "high": high}
+    assert s["sim_time_mean"] == pytest.approx((90 + 30 + 2) / 3)  # the ones that ran
 
 
 def test_a_folder_of_another_evaluation_is_refused(tmp_path: Path) -> None:
@@ -72,7 +98,7 @@ def test_a_folder_of_another_evaluation_is_refused(tmp_path: Path) -> None:
     settings = Settings(str(WORLD), 3, 0, None, ("robot_000=cleanup.robot",), "mujoco", 60.0, ("--fast",), (), ".")
     assert prepare(tmp_path, settings, resume=False) == []
     EpisodeLog(tmp_path).append(EpisodeRow(0, 0, "done", True))
-    with pytest.raises(EvalError, match="holds 1 episodes.*--resume"):
+    with pytest.raises(EvalError, match="holds 1 episode of.*--resume"):
         prepare(tmp_path, settings, resume=False)
     other = Settings(str(WORLD), 3, 7, None, ("robot_000=cleanup.robot",), "mujoco", 60.0, ("--fast",), (), ".")
     with pytest.raises(EvalError, match="seed: 0 then, 7 now"):
@@ -96,7 +122,7 @@ def test_controller_episodes_with_the_same_seeds_give_the_same_results(tmp_path:
     assert [row["seed"] for row in runs[0]] == ["11", "12"]
     assert all(row["result"] == "succeeded" and row["score"] == "3150.0" for row in runs[0])
     summary = json.loads((tmp_path / "a" / "summary.json").read_text())
-    assert summary["succeeded"] == 2 and summary["success_interval_95"][1] == 1.0
+    assert summary["succeeded"] == 2 and summary["success_interval_95"]["high"] == 1.0
     assert summary["settings"]["seed"] == 11
     for row in runs[0]:
         result = json.loads((Path(row["folder"]) / "result.json").read_text())
@@ -137,3 +163,103 @@ def test_bad_settings_are_refused_with_what_is_valid(tmp_path: Path) -> None:
     EpisodeLog(tmp_path).append(EpisodeRow(0, 0, "done", True))
     r = _eval(str(WORLD), "--controller", "robot_000=cleanup.robot", "--out", str(tmp_path))
     assert r.returncode == 2 and "--resume to go on" in r.stderr
+
+
+def test_domain_ranges_are_read_and_bad_ones_refused() -> None:
+    """LOW-HIGH (both included) and N are read; a range outside 0-232, LOW above HIGH or another form is refused,
+    naming the valid form."""
+    assert parse_domains("120-232") == range(120, 233)
+    assert parse_domains(" 40 - 49 ") == range(40, 50)
+    assert parse_domains("0") == range(0, 1)
+    for bad, why in (("200-233", "above 232"), ("9-3", "LOW 9 is above HIGH 3"), ("a-b", "not a range"),
+                     ("-1", "not a range"), ("1-2-3", "not a range"), ("", "not a range")):
+        with pytest.raises(EvalError, match=why) as e:
+            parse_domains(bad)
+        assert "valid: LOW-HIGH with 0 <= LOW <= HIGH <= 232" in str(e.value)
+
+
+def test_leases_take_distinct_domains_of_their_range(tmp_path: Path) -> None:
+    """Two leases of a range of two domains hold both, one each; a lease of one domain gets it when it is free."""
+    with DomainLease(range(7, 9), tmp_path) as a, DomainLease(range(7, 9), tmp_path) as b:
+        assert {a, b} == {7, 8}
+    with DomainLease(range(8, 9), tmp_path) as c:
+        assert c == 8
+
+
+def test_the_domain_option_wins_over_the_environment_variable(tmp_path: Path) -> None:
+    """--domains gives the episodes' domains, else SIGCORE_EVAL_DOMAINS does (read back from episodes.csv); a bad
+    one of either is refused (exit 2) naming where it came from and the valid form."""
+    base = [str(WORLD), "--controller", "robot_000=cleanup.robot", "--duration", "0.5", "--episodes", "2",
+            "--workers", "2"]
+    r = _eval(*base, "--domains", "225-226", "--out", str(tmp_path / "option"), env={ENV: "7-8"})
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert sorted(int(row["domain"]) for row in _rows(tmp_path / "option")) == [225, 226]
+    r = _eval(*base, "--out", str(tmp_path / "env"), env={ENV: "227-228"})
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert sorted(int(row["domain"]) for row in _rows(tmp_path / "env")) == [227, 228]
+    assert json.loads((tmp_path / "env" / "eval.json").read_text())["domains"] == [227, 228]
+    r = _eval(*base, "--domains", "300", "--out", str(tmp_path / "bad"))
+    assert r.returncode == 2 and "--domains '300': domain 300 is above 232" in r.stderr, r.stderr
+    r = _eval(*base, "--out", str(tmp_path / "bad"), env={ENV: "1..5"})
+    assert r.returncode == 2 and f"{ENV} '1..5' is not a range" in r.stderr and "LOW-HIGH" in r.stderr, r.stderr
+    assert not (tmp_path / "bad").exists()
+
+
+def test_min_success_gates_the_exit_code(tmp_path: Path) -> None:
+    """--min-success 0.5: exit 1 when fewer succeed (0 of 1: the task cut at 1 simulated second), exit 0 when enough
+    do (1 of 1: the scripted controller's whole task); without it, 0 % still exits 0; a rate outside 0-1 is refused.
+    One episode is written "1 episode", never "1 episodes"."""
+    base = [str(WORLD), "--controller", "robot_000=cleanup.robot", "--episodes", "1"]
+    r = _eval(*base, "--duration", "1", "--min-success", "0.5", "--out", str(tmp_path / "few"))
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "success rate: 0.0 %" in r.stdout and "below --min-success 0.5 (50 %): exit 1" in r.stderr, r.stderr
+    assert "1 episode with a score" in r.stdout and "1 episodes" not in r.stdout + r.stderr
+    r = _eval(*base, "--duration", "1", "--out", str(tmp_path / "ungated"))
+    assert r.returncode == 0, r.stdout + r.stderr
+    r = _eval(*base, "--min-success", "0.5", "--out", str(tmp_path / "enough"))
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "success rate: 100.0 %" in r.stdout and "at least --min-success 0.5: exit 0" in r.stderr
+    r = _eval(*base, "--min-success", "50", "--out", str(tmp_path / "bad"))
+    assert r.returncode == 2 and "--min-success 50: a success rate is a fraction; valid: 0 to 1" in r.stderr
+
+
+def test_an_episode_still_running_at_the_timeout_is_timed_out(tmp_path: Path) -> None:
+    """The scripted controller paced at real time (a task of about 90 simulated seconds) with --timeout 30: the
+    episode is stopped and recorded as `timeout`, not `not_started` (it had left t = 0: its results say so); the
+    console names its logs."""
+    r = _eval(str(WORLD), "--controller", "robot_000=cleanup.robot", "--factor", "1", "--timeout", "30",
+              "--episodes", "1", "--out", str(tmp_path))
+    assert r.returncode == 0, r.stdout + r.stderr
+    (row,) = _rows(tmp_path)
+    assert row["status"] == "timeout" and float(row["sim_time"]) > 0, row
+    assert "not ended within 30 s" in row["reason"]
+    assert f"logs: {tmp_path / 'episodes' / '0000'}" in r.stderr
+    assert "sigcore eval: stopped the simulator (SIGTERM)" in (tmp_path / "episodes" / "0000" / "sim.log").read_text()
+
+
+def test_the_eta_counts_the_workers() -> None:
+    """4 episodes of 100 s on 2 workers: when the first 2 end at 100 s, 100 s are left (not 3 x 100 s, as if one ran
+    at a time); the ETA then counts down with the clock, and is 0 once all have ended."""
+    now = [0.0]
+    eta = Eta(4, 2, clock=lambda: now[0])
+    assert eta.left() is None
+    now[0] = 100.0
+    eta.ended(100.0)
+    assert eta.left() == pytest.approx(100.0)
+    eta.ended(100.0)
+    assert eta.left() == pytest.approx(100.0)
+    now[0] = 150.0
+    assert eta.left() == pytest.approx(50.0)
+    now[0] = 200.0
+    eta.ended(100.0)
+    eta.ended(100.0)
+    assert eta.left() == 0.0
+    one = Eta(3, 1, clock=lambda: now[0])
+    now[0] = 260.0
+    one.ended(60.0)
+    assert one.left() == pytest.approx(120.0)
+    late = Eta(2, 4, clock=lambda: now[0])  # more workers than episodes
+    late.set_workers(8)
+    now[0] = 300.0
+    late.ended(40.0)
+    assert late.left() == pytest.approx(0.0)

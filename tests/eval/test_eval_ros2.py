@@ -1,6 +1,7 @@
 """sigcore eval of the example ROS 2 solution (examples/cleanup/robot_node.py --lockstep, a separate rclpy process
-per episode) over randomised episodes: locally with 2 workers, with a solution that crashes and one that hangs among
-them, and the same episodes as tasks on a local Ray cluster bound to 127.0.0.1."""
+per episode) over randomised episodes: locally with 2 workers in a given range of ROS 2 domains, with a solution that
+crashes and one that never starts the simulation among them, and the same episodes as tasks on a local Ray cluster
+bound to 127.0.0.1; a solution that dies at once."""
 
 from __future__ import annotations
 
@@ -23,10 +24,22 @@ pytest.importorskip("sigcore_msgs")
 ROOT = Path(__file__).parent.parent.parent
 WORLD = ROOT / "tests" / "data" / "eval" / "cleanup_one.xml"  # one trash item: an episode takes about 20 s here
 NODE = f"{sys.executable} {ROOT / 'examples' / 'cleanup' / 'robot_node.py'} --lockstep"
-# episode 0 (seed 0) hangs, episode 1 (seed 1) crashes, the others run the example node
-SOLUTION = f'case "$SIGCORE_SEED" in 0) exec sleep 1000;; 1) sleep 1; exit 3;; *) exec {NODE};; esac'
-TIMEOUT = 100  # a normal episode takes about 20 s alone, about 35 s beside another: the hang ends at 100 s
+# each says its domain; episode 0 (seed 0) hangs without a node (the simulator waits at t = 0 for its peers),
+# episode 1 (seed 1) crashes, the others run the example node
+SOLUTION = (f'echo "ROS_DOMAIN_ID=$ROS_DOMAIN_ID"; case "$SIGCORE_SEED" in 0) exec sleep 1000;; 1) sleep 1; exit 3;; '
+            f'*) exec {NODE};; esac')
+TIMEOUT = 150  # a normal episode takes about 20 s alone, about 35 s beside another (65 s on a loaded machine): the
+# hang ends at 150 s
+SIM_TIME_MARGIN = 10.0  # [s] the simulation runs at real time from its start until the node takes it in lockstep:
+# 2.2 s apart once on a loaded machine (load average 18 on 2 cores)
+RAY_TIMEOUT = 400  # no episode hangs on Ray: a margin for a loaded machine costs nothing there
+DOMAINS = range(229, 232)  # --domains 229-231 here; 226-228 (SIGCORE_EVAL_DOMAINS) on Ray
 COMPARED = ("status", "success", "result", "score", "events")
+
+
+def _eval(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "sigcore", "eval", *args], capture_output=True, text=True,
+                          timeout=600, cwd=ROOT, env={**os.environ, **(env or {})})
 
 
 def _rows(folder: Path) -> dict[int, dict[str, str]]:
@@ -36,12 +49,10 @@ def _rows(folder: Path) -> dict[int, dict[str, str]]:
 
 @pytest.fixture(scope="module")
 def local(tmp_path_factory: pytest.TempPathFactory) -> dict:
-    """6 episodes (seeds 0..5), 2 at once."""
+    """6 episodes (seeds 0..5), 2 at once, in domains 229-231."""
     out = tmp_path_factory.mktemp("eval_local")
-    r = subprocess.run([sys.executable, "-m", "sigcore", "eval", str(WORLD), "--solution", SOLUTION,
-                        "--wait-for", "/robot_000/cmd_vel", "--episodes", "6", "--workers", "2",
-                        "--timeout", str(TIMEOUT), "--out", str(out)], capture_output=True, text=True,
-                       timeout=600, cwd=ROOT)
+    r = _eval(str(WORLD), "--solution", SOLUTION, "--wait-for", "/robot_000/cmd_vel", "--episodes", "6", "--workers",
+              "2", "--timeout", str(TIMEOUT), "--domains", "229-231", "--out", str(out))
     return {"run": r, "out": out}
 
 
@@ -64,23 +75,56 @@ def test_the_example_solution_over_randomised_episodes(local: dict) -> None:
     assert len({rows[i]["domain"] for i in range(6)}) >= 2  # episodes at once never share a domain
     summary = json.loads((out / "summary.json").read_text())
     assert summary["succeeded"] == 4 and summary["episodes"] == 6
-    assert summary["failures"] == {"timeout": 1, "solution_crashed": 1, "simulator_error": 0}
-    assert "success rate: 66.7 %" in r.stdout and "timed out 1, solution crashed 1" in r.stdout
+    assert summary["failures"] == {"timeout": 0, "not_started": 1, "solution_crashed": 1, "simulator_error": 0}
+    assert "success rate: 66.7 %" in r.stdout and "timed out 0, not started 1, solution crashed 1" in r.stdout
 
 
-def test_a_hanging_and_a_crashing_solution_are_recorded_as_such(local: dict) -> None:
-    """The hanging solution's episode is killed at the timeout (its process group: no sleep is left); the
-    crashing one is recorded with its exit code, and its simulator was stopped (SIGINT: it ends as it would on
-    Ctrl-C, here while it was still starting)."""
+def test_each_episode_takes_its_domain_from_the_given_range(local: dict) -> None:
+    """--domains 229-231: every episode's domain (episodes.csv) is in the range, and is the ROS_DOMAIN_ID its
+    solution saw; the simulator was in it too (the example node's episodes played: their --wait-for saw the node)."""
     rows = _rows(local["out"])
+    for row in rows.values():
+        assert int(row["domain"]) in DOMAINS, row
+        seen = (Path(row["folder"]) / "solution.log").read_text().splitlines()[0]
+        assert seen == f"ROS_DOMAIN_ID={row['domain']}", (seen, row)
+    assert all(float(rows[i]["sim_time"]) > 0 for i in range(2, 6))
+    assert "ROS 2 domains 229-231" in local["run"].stderr
+
+
+def test_a_simulation_that_never_started_is_reported_as_such(local: dict) -> None:
+    """The solution that never makes the awaited topic's peers: its episode is stopped at the timeout as
+    `not_started` (the simulation still at t = 0, the --wait-for topic named), its process group killed (no sleep is
+    left), and its score of 0 is left out of the mean score, which says so; the crashing one is recorded with its exit
+    code, and its simulator was stopped."""
+    r, rows = local["run"], _rows(local["out"])
     hang, crash = rows[0], rows[1]
-    assert hang["status"] == "timeout" and float(hang["wall_time"]) >= TIMEOUT - 1, hang
-    assert float(hang["wall_time"]) < TIMEOUT + 30
+    assert hang["status"] == "not_started" and hang["sim_time"] == "0.0", hang
+    assert "still at t = 0" in hang["reason"] and "--wait-for /robot_000/cmd_vel" in hang["reason"], hang
+    assert TIMEOUT - 1 <= float(hang["wall_time"]) < TIMEOUT + 30, hang
     assert crash["status"] == "solution_crashed" and crash["solution_exit"] == "3", crash
-    assert "exited 3" in crash["reason"] and crash["sim_exit"] in ("", "0", "1", "130"), crash  # "": SIGINT
-    # ended it before Python's handler was installed
+    assert "exited 3" in crash["reason"] and crash["sim_exit"] in ("", "0", "1"), crash  # "": ended by SIGTERM
     stray = subprocess.run(["pgrep", "-f", "exec sleep 1000|^sleep 1000"], capture_output=True, text=True)
     assert stray.stdout == "", stray.stdout
+    summary = json.loads((local["out"] / "summary.json").read_text())
+    assert summary["scored_episodes"] == 4 and summary["score_mean"] == 1050.0, summary
+    assert summary["score_excluded"]["never_ran"] >= 1  # the hang; the crash too if it came at t = 0
+    assert "not in score: " in r.stdout and "that never left t = 0" in r.stdout, r.stdout
+    assert f"logs: {hang['folder']}" in r.stderr
+
+
+def test_a_solution_that_dies_at_once_leaves_clean_logs(tmp_path: Path) -> None:
+    """A solution that exits 3 at once, while its simulator is still starting: sim.log holds no traceback but one
+    line saying why and how the simulator was stopped; the console names where the logs are."""
+    r = _eval(str(WORLD), "--solution", "exit 3", "--wait-for", "/robot_000/cmd_vel", "--episodes", "2", "--workers",
+              "2", "--out", str(tmp_path))
+    assert r.returncode == 0, r.stdout + r.stderr
+    for i, row in _rows(tmp_path).items():
+        assert row["status"] == "solution_crashed" and row["solution_exit"] == "3", row
+        log = (Path(row["folder"]) / "sim.log").read_text()
+        assert "Traceback" not in log and "KeyboardInterrupt" not in log, log
+        assert "sigcore eval: stopped the simulator (SIGTERM)" in log and "the solution exited 3" in log, log
+        assert f"logs: {tmp_path / 'episodes' / f'{i:04d}'}" in r.stderr
+    assert f"logs:         {tmp_path / 'episodes'}/NNNN/" in r.stdout
 
 
 def _free_port() -> int:
@@ -111,20 +155,21 @@ def ray_cluster() -> Iterator[str]:
 def test_the_same_episodes_on_a_local_ray_cluster_give_the_same_results(local: dict, ray_cluster: str,
                                                                            tmp_path: Path) -> None:
     """Episodes 2..5 (seeds 2..5) as Ray tasks of 1 CPU each: the same status, result, score and events as run here
-    (simulated time within 2 s: the node pauses the simulation a few steps after it plays); their logs came back
-    from the workers; every node of the cluster, as Ray lists them, has the address 127.0.0.1."""
+    (simulated time within SIM_TIME_MARGIN: the node pauses the simulation some steps after it plays); their logs
+    came back from the workers; their domains are of SIGCORE_EVAL_DOMAINS; every node of the cluster, as Ray lists
+    them, has the address 127.0.0.1."""
     out = tmp_path / "ray"
-    r = subprocess.run([sys.executable, "-m", "sigcore", "eval", str(WORLD), "--solution", SOLUTION,
-                        "--wait-for", "/robot_000/cmd_vel", "--episodes", "4", "--seed", "2", "--timeout",
-                        str(TIMEOUT), "--ray", ray_cluster, "--out", str(out)], capture_output=True, text=True,
-                       timeout=600, cwd=ROOT)
+    r = _eval(str(WORLD), "--solution", SOLUTION, "--wait-for", "/robot_000/cmd_vel", "--episodes", "4", "--seed", "2",
+              "--timeout", str(RAY_TIMEOUT), "--ray", ray_cluster, "--out", str(out),
+              env={"SIGCORE_EVAL_DOMAINS": "226-228"})
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
     here, there = _rows(local["out"]), _rows(out)
     assert sorted(there) == [0, 1, 2, 3]
     for i, row in there.items():
         assert row["seed"] == str(i + 2)
         assert [row[k] for k in COMPARED] == [here[i + 2][k] for k in COMPARED], (row, here[i + 2])
-        assert abs(float(row["sim_time"]) - float(here[i + 2]["sim_time"])) < 2.0
+        assert abs(float(row["sim_time"]) - float(here[i + 2]["sim_time"])) < SIM_TIME_MARGIN
         assert "lockstep: paused" in (Path(row["folder"]) / "solution.log").read_text()
+        assert 226 <= int(row["domain"]) <= 228, row
     nodes = json.loads((out / "summary.json").read_text())["nodes"]
     assert nodes and all(n["address"] == "127.0.0.1" for n in nodes), nodes

@@ -481,7 +481,8 @@ def test_a_world_load_is_recorded_in_log_order_and_not_replayed(tmp_path: Path) 
 
 
 def test_replay_cli_checks_and_refuses_what_it_cannot_reproduce(tmp_path: Path) -> None:
-    """sigcore replay of that recording: exit 0, 'bitwise equal', the commands counted; a recording whose input
+    """sigcore replay of that recording: exit 0, every ground-truth frame 'bitwise equal', the commands counted;
+    the referee's topics, not recorded, said to be not compared; a recording whose input
     log holds a spawn noted as sigcore noted one before spawns were replayed (only 'what'), or a world load, is
     refused before it runs, naming the step and offering --until; --until before it replays up to there, --until
     after a world load is refused; a spawn whose file is gone stops the replay there (exit 3) naming the step, the
@@ -489,8 +490,10 @@ def test_replay_cli_checks_and_refuses_what_it_cannot_reproduce(tmp_path: Path) 
     _drive_and_record(tmp_path / "bag")
     out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "bag")], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stdout + out.stderr
-    assert "6 commands applied" in out.stdout and "ground truth at step 1500:" in out.stdout
-    assert "bitwise equal" in out.stdout
+    assert "6 commands applied (of 6 recorded)" in out.stdout, out.stdout
+    # every 17th step at 30 Hz and 2 ms: 0, 17, ..., 1496, and the last step
+    assert "ground truth: all 90 recorded messages (steps 0 to 1500) bitwise equal" in out.stdout, out.stdout
+    assert "referee: no score, events or result recorded" in out.stdout and "not compared" in out.stdout
 
     for name, kind, what in [("spawned", "spawn", "spawn_entity crate"), ("world", "world", "load_world other")]:
         sim = Simulation(parse_world(WORLD), "mujoco")
@@ -505,7 +508,8 @@ def test_replay_cli_checks_and_refuses_what_it_cannot_reproduce(tmp_path: Path) 
         assert "--until 100" in out.stderr
     out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "world"), "--until", "85", "--transport", "none"],
                          capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0 and "ground truth at step 85:" in out.stdout and "bitwise equal" in out.stdout
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "ground truth: all 6 recorded messages (steps 0 to 85) bitwise equal" in out.stdout, out.stdout
     out = subprocess.run([*SIGCORE, "replay", str(tmp_path / "world"), "--until", "150", "--transport", "none"],
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 2 and "the run's first world ended at step 100" in out.stderr, out.stderr

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     import pytest
+    from sigcore_ros2.config import Ros2Config
     from sigcore_ros2.transport import Ros2Transport
 
     from sigcore.sim import Simulation
@@ -26,6 +27,9 @@ if TYPE_CHECKING:
 HERE = Path(__file__).parent
 CLIENTS = HERE / "clients"
 WORLD = HERE.parent / "data" / "sim" / "world.xml"
+ALL_AGENTS = ("--ros-args", "-p", "sigros_agents:=all")
+"""``sigcore run`` arguments giving every agent its sig_ros endpoints (the default, ``auto``, leaves out the objects
+without a controller)."""
 _domains = itertools.count()
 
 
@@ -131,11 +135,11 @@ def wait_until(predicate: object, timeout: float = 10.0) -> bool:
     return False
 
 
-def start_in_process(monkeypatch: pytest.MonkeyPatch,
-                     world: Path) -> tuple[Simulation, Ros2Transport, dict[str, str]]:
-    """A paused simulation of ``world`` (MuJoCo) with the ROS 2 transport started in this process, in the test's
-    own ROS domain (``monkeypatch`` sets it here): ``(sim, transport, environment for client processes)``; the
-    caller stops the transport."""
+def start_in_process(monkeypatch: pytest.MonkeyPatch, world: Path, config: Ros2Config | None = None,
+                     ) -> tuple[Simulation, Ros2Transport, dict[str, str]]:
+    """A paused simulation of ``world`` (MuJoCo) with the ROS 2 transport started in this process (with
+    ``config``; default: the world's settings), in the test's own ROS domain (``monkeypatch`` sets it here):
+    ``(sim, transport, environment for client processes)``; the caller stops the transport."""
     from sigcore_ros2.transport import Ros2Transport
 
     from sigcore.sim import Simulation
@@ -146,6 +150,6 @@ def start_in_process(monkeypatch: pytest.MonkeyPatch,
         monkeypatch.setenv(key, env[key])
     sim = Simulation(parse_world(world), "mujoco")
     sim.control.paused = True
-    transport = Ros2Transport()
+    transport = Ros2Transport(config)
     transport.start(sim)
     return sim, transport, env

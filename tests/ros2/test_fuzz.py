@@ -14,7 +14,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
-from rosproc import WORLD, start_sim  # noqa: E402
+from rosproc import ALL_AGENTS, WORLD, start_sim  # noqa: E402
 from test_transport import expected_endpoints  # noqa: E402
 
 from sigcore.api import api_table  # noqa: E402
@@ -45,7 +45,7 @@ def test_fuzz_campaign_every_endpoint_answers_and_the_log_stays_small(tmp_path: 
     expected = tmp_path / "expected.json"
     expected.write_text(json.dumps({"services": sorted(services),
                                     "topics": sorted(t for t in topics if t.endswith(commands))}))
-    sim = start_sim(tmp_path, WORLD, "--paused", "--realtime")
+    sim = start_sim(tmp_path, WORLD, "--paused", "--realtime", *ALL_AGENTS)
     try:
         out = sim.client("fuzz_campaign.py", str(SEED), str(REQUESTS), str(expected), timeout=240)
         alive = sim.alive()
@@ -79,7 +79,7 @@ def test_fuzz_campaign_every_endpoint_answers_and_the_log_stays_small(tmp_path: 
 def test_parameter_services_answer_and_malformed_requests_are_refused(tmp_path: Path) -> None:
     """/sigcore and /sigcore_actions parameter services answer (use_sim_time true on /sigcore, read-only);
     unknown, mistyped and malformed SetParameters get refusals naming the problem; the action still works."""
-    sim = start_sim(tmp_path, WORLD, "--paused", "--realtime")
+    sim = start_sim(tmp_path, WORLD, "--paused", "--realtime", *ALL_AGENTS)
     try:
         out = sim.client("params.py", timeout=120)
         log = sim.output()

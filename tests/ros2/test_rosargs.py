@@ -43,7 +43,7 @@ def _run(*args: str) -> subprocess.CompletedProcess[str]:
     (["-p", "state_rte:=10"], "-p state_rte: unknown parameter; valid: clock_rate, "),
     (["-p", "state_rate:=fast"], "-p state_rate:=fast: 'fast' is not a number; valid: a number, state_rate > 0 [Hz]"),
     (["-p", "use_sim_time:=false"], "use_sim_time is always true"),
-    (["-p", "sigros_agents:=robots nobody"], "'nobody' is no agent, kind or tag of this world; valid: all, robots"),
+    (["-p", "sigros_agents:=robots nobody"], "'nobody' is no agent, kind or tag of this world; valid: auto, all"),
     (["--params-file", "x.yaml"], "unknown argument '--params-file'; valid: -r/--remap FROM:=TO, -p/--param"),
     (["-r", "clock"], "-r 'clock' is not FROM:=TO"),
     (["--log-level", "loud"], "unknown level 'loud'; valid: debug, info, warn, error, fatal"),

@@ -34,6 +34,7 @@ def _agents_with_endpoints(names: list[str]) -> set[str]:
 @pytest.mark.parametrize(("selection", "selected"), [
     ("all", set(AGENTS)), ("robots agents", {"bot", "moderator"}), ("tag:trash man", {"cube", "man"}),
     ("objects", {"cube", "ball", "heavy", "wall"}), ("humans heavy", {"man", "heavy"}),
+    ("auto", {"bot", "man", "moderator"}), ("auto heavy tag:wall", {"bot", "man", "moderator", "heavy", "wall"}),
 ])
 def test_plan_has_sigros_endpoints_of_the_selected_agents_only(tmp_path: Path, selection: str,
                                                               selected: set[str]) -> None:
@@ -46,10 +47,11 @@ def test_plan_has_sigros_endpoints_of_the_selected_agents_only(tmp_path: Path, s
 
 
 @pytest.mark.parametrize(("selection", "message"), [
-    ("robots nobody", "'nobody' is no agent, kind or tag of this world; valid: all, robots, objects, humans, agents"),
+    ("robots nobody", "'nobody' is no agent, kind or tag of this world; valid: auto, all, robots, objects, humans, "
+                      "agents"),
     ("tag:nothing", "no agent has the tag 'nothing'; tags of this world: furniture, trash, wall"),
     ("all bot", "'all' selects every agent: give it alone"),
-    ("", "empty; valid: 'all'"),
+    ("", "empty; valid: 'auto', 'all'"),
 ])
 def test_unknown_selection_is_a_located_world_error(tmp_path: Path, selection: str, message: str) -> None:
     """A word naming no agent, kind or tag of the world is refused at the attribute, with the valid ones."""

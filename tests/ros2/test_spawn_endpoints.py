@@ -15,6 +15,7 @@ pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importabl
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
 from rosproc import CLIENTS, WORLD, ros_env, start_in_process  # noqa: E402
+from sigcore_ros2.config import Ros2Config  # noqa: E402
 from sigcore_ros2.transport import Ros2Transport  # noqa: E402
 
 from sigcore.sim.simulation import Simulation  # noqa: E402
@@ -27,8 +28,9 @@ BOX = '<object shape="box" size="0.1 0.1 0.1"/>'
 def test_a_queued_request_of_a_deleted_agent_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
     """A request to a spawned box's service that is queued (not yet served) when the box is deleted gets
     success=false saying the agent was deleted; the box's endpoints are gone from the transport and from the
-    receiver, while another spawned agent's are there."""
-    sim, transport, env = start_in_process(monkeypatch, WORLD)
+    receiver, while another spawned agent's are there (every agent selected: a plain box has no endpoints of its
+    own by default)."""
+    sim, transport, env = start_in_process(monkeypatch, WORLD, Ros2Config(sigros_agents=("all",)))
     proc = None
     try:
         assert sim.spawn([SpawnRequest(name="crate", resource=BOX, xyz=(1.0, -1.0, 0.05)),
@@ -63,8 +65,6 @@ def test_spawned_agents_follow_the_sigros_agents_selection(monkeypatch: pytest.M
     """With sigros_agents="robots tag:keep", a spawned object gets sig_ros endpoints (published topics included)
     only when it carries the tag, and a spawned robot gets them and its joint_states; deleting the robot removes
     its joint_states."""
-    from sigcore_ros2.config import Ros2Config
-
     env = ros_env()
     for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
         monkeypatch.setenv(key, env[key])

@@ -13,7 +13,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
-from rosproc import WORLD, client_against  # noqa: E402
+from rosproc import ALL_AGENTS, WORLD, client_against  # noqa: E402
 
 SIGBOT = Path(__file__).resolve().parents[2] / "worlds" / "models" / "sigbot" / "sigbot.urdf"
 OK, NOT_FOUND, OPERATION_FAILED = 1, 2, 4
@@ -28,9 +28,9 @@ REST = 0.02
 
 @pytest.fixture(scope="module", params=["mujoco", "bullet"])
 def out(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict]:
-    """What clients/spawn.py saw, per backend."""
+    """What clients/spawn.py saw, per backend (every agent with its sig_ros endpoints, the spawned box too)."""
     yield from client_against(tmp_path_factory.mktemp(f"spawn_{request.param}"), WORLD, "spawn.py", str(SIGBOT),
-                              sim_args=("--backend", request.param), timeout=240)
+                              sim_args=("--backend", request.param, *ALL_AGENTS), timeout=240)
 
 
 def test_spawning_is_announced(out: dict) -> None:

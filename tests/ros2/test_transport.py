@@ -28,7 +28,7 @@ def _exists(ros_type: str, kind: str) -> bool:
 
 
 def expected_endpoints() -> tuple[dict[str, str], dict[str, str]]:
-    """Topics and services the world must have, with their types, from the API table."""
+    """Topics and services the world must have with ``sigros_agents=all``, with their types, from the API table."""
     world = parse_world(WORLD)
     lidars = {a.name for a in world.agents if a.kind == "robot" and a.lidars}
     topics: dict[str, str] = {}
@@ -42,6 +42,12 @@ def expected_endpoints() -> tuple[dict[str, str], dict[str, str]]:
                 continue  # a type newer than the built sigcore_msgs (the transport warns and leaves it out)
             full = e.ros_type if "/" in e.ros_type else f"sigcore_msgs/{kind}/{e.ros_type}"
             (services if kind == "srv" else topics)[f"/{e.name_for(agent.name)}"] = full
+    for e in api_table():  # the shared endpoints: every function whose request names its entity, by name
+        if e.direction != "publish" and e.request is not None and "name" in e.request.model_fields \
+                and e.ros_type != "SendMsgToSrv" and _exists(e.ros_type, "srv" if e.direction == "service" else "msg"):
+            kind = "srv" if e.direction == "service" else "msg"
+            full = e.ros_type if "/" in e.ros_type else f"sigcore_msgs/{kind}/{e.ros_type}"
+            (services if kind == "srv" else topics)[f"/sigcore/sigros/{e.suffix.lstrip('_')}"] = full
     topics.update({"/clock": "rosgraph_msgs/msg/Clock", "/tf": "tf2_msgs/msg/TFMessage",
                    "/tf_static": "tf2_msgs/msg/TFMessage", "/sigcore/ready": "std_msgs/msg/Bool",
                    "/bot/cmd_vel": "geometry_msgs/msg/Twist", "/bot/odom": "nav_msgs/msg/Odometry",

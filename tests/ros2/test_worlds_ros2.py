@@ -13,7 +13,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
-from rosproc import WORLD, start_sim, wait_until  # noqa: E402
+from rosproc import ALL_AGENTS, WORLD, start_sim, wait_until  # noqa: E402
 
 WORLDS = Path(__file__).resolve().parents[2] / "worlds"
 CLEANUP, ARM6 = WORLDS / "cleanup.xml", WORLDS / "arm6.xml"
@@ -27,9 +27,10 @@ WORLD_FEATURES = {40, 41, 42, 43, 44, 45}
 
 @pytest.fixture(scope="module", params=["mujoco", "bullet"])
 def run(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict]:
-    """What clients/worlds.py saw, per backend, and whether the simulation then quit cleanly (``exit``)."""
+    """What clients/worlds.py saw, per backend, and whether the simulation then quit cleanly (``exit``); every
+    agent with its sig_ros endpoints (the spawned box's are checked)."""
     sim = start_sim(tmp_path_factory.mktemp(f"worlds_{request.param}"), CLEANUP, "--backend", request.param,
-                    "--worlds", str(WORLD))
+                    "--worlds", str(WORLD), *ALL_AGENTS)
     try:
         out = sim.client("worlds.py", str(CLEANUP), str(ARM6), str(WORLD), timeout=240)
         out["exited"] = wait_until(lambda: not sim.alive(), 30.0)

@@ -5,8 +5,10 @@ an image is drawn on the simulation's thread at the step it belongs to (the snap
 gives TinyRenderer an OpenGL view matrix from the optical frame and a projection matrix from the intrinsics (any
 principal point); depth is the depth buffer converted to distances along the optical axis.
 
-Bodies built without a visual shape (sigcore's objects and humans) are drawn from their collision shapes; the colour
-of an object is given to its shape once, before the first image.
+Bodies built without a visual shape (sigcore's objects and humans) are drawn from their collision shapes, and the
+URDFs' visuals are dropped (:mod:`.urdf_prep`); each link is given its colour in the scene description once, before
+the first image (:func:`sigcore.scene.link_colors`; a shape its world-file colour), so the camera shows what the
+viewer shows.
 """
 
 from __future__ import annotations
@@ -18,7 +20,9 @@ import numpy as np
 import pybullet as pb
 
 from sigcore.backend import CameraView, Image, Renderer
-from sigcore.world.models import Object
+from sigcore.scene import link_colors
+from sigcore.world.models import Object, Robot
+from sigcore.world.visuals import DEFAULT_COLOR
 
 if TYPE_CHECKING:
     from .backend import BulletBackend
@@ -54,13 +58,24 @@ class BulletRenderer(Renderer):
         return None
 
     def _colour(self) -> None:
-        """Give each object's shape its world-file colour (once per object)."""
+        """Give each object's shape its world-file colour, and each link of a URDF its scene colour (once per
+        entity)."""
         b = self._backend
         for agent in b._world.agents:  # the renderer is the backend's own: its world and bodies are read here
-            if isinstance(agent, Object) and agent.name not in self._coloured and agent.shape is not None:
-                body = b._entity(agent.name).body
+            if agent.name in self._coloured or not isinstance(agent, Object | Robot):
+                continue
+            body = b._entity(agent.name).body
+            if isinstance(agent, Object) and agent.urdf is None:
                 pb.changeVisualShape(body, -1, rgbaColor=list(agent.color), physicsClientId=b.client)
-                self._coloured.add(agent.name)
+            else:
+                colors = link_colors(b._world, agent)
+                links = {-1: pb.getBodyInfo(body, physicsClientId=b.client)[0].decode()}
+                for i in range(pb.getNumJoints(body, physicsClientId=b.client)):
+                    links[i] = pb.getJointInfo(body, i, physicsClientId=b.client)[12].decode()
+                for index, link in links.items():
+                    pb.changeVisualShape(body, index, rgbaColor=list(colors.get(link, DEFAULT_COLOR)),
+                                         physicsClientId=b.client)
+            self._coloured.add(agent.name)
 
     def render(self, snapshot: object, views: Sequence[CameraView]) -> list[tuple[Image | None, Image | None]]:
         out: list[tuple[Image | None, Image | None]] = []

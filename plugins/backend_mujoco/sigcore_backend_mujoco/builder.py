@@ -33,9 +33,10 @@ import numpy as np
 
 from sigcore.backend import BackendError
 from sigcore.geometry import quat_from_rpy
-from sigcore.scene import HUMAN_COLOR, human_dimensions
+from sigcore.scene import HUMAN_COLOR, Color, human_dimensions, link_colors
 from sigcore.world.models import Human, Object, Pose, Robot, World
 from sigcore.world.urdf import UrdfDocument, UrdfError
+from sigcore.world.visuals import DEFAULT_COLOR
 
 from .plan import (
     FREE_JOINT,
@@ -153,8 +154,10 @@ def _frame(pose: Pose) -> tuple[list[float], list[float]]:
 
 
 def _style(body: mujoco.MjsBody, friction: dict[str, float], default: float | None,
-           rgba: tuple[float, ...] | None = None) -> None:
-    """Give every geom below ``body`` the backend's collision bits, group and friction (per body name)."""
+           colors: dict[str, Color]) -> None:
+    """Give every geom below ``body`` the backend's collision bits, group and friction (per body name), and the
+    colour of its link in the scene description (:func:`sigcore.scene.link_colors`: what the camera shows is what
+    the viewer shows)."""
     for geom in body.find_all(mujoco.mjtObj.mjOBJ_GEOM):
         if geom.contype == 0 and geom.conaffinity == 0:
             geom.group = GROUP_VISUAL
@@ -168,8 +171,7 @@ def _style(body: mujoco.MjsBody, friction: dict[str, float], default: float | No
             geom.friction[0] = mu
             if mu == 0.0:
                 geom.condim = 1  # frictionless: a zero-width friction pyramid is degenerate for the solver
-        if rgba is not None:
-            geom.rgba = _visible(rgba)
+        geom.rgba = _visible(colors.get(link, DEFAULT_COLOR))
 
 
 def _visible(rgba: tuple[float, ...]) -> list[float]:
@@ -193,7 +195,7 @@ def _add_robot(spec: mujoco.MjSpec, world: World, robot: Robot) -> EntityPlan:
         raise BackendError(f"{what}: {e}") from None
     loaded = load_urdf(document, what)
     root = _attach(spec, loaded.spec, robot.name, robot.pose, free=not robot.fixed)
-    _style(root, loaded.friction, None)
+    _style(root, loaded.friction, None, link_colors(world, robot))
     _exclude_self(spec, root)
     wheels = {robot.drive.left, robot.drive.right} if robot.drive is not None else set()
     joints: list[JointPlan] = []
@@ -269,7 +271,7 @@ def _add_urdf_object(spec: mujoco.MjSpec, world: World, obj: Object) -> EntityPl
     what = f"object '{obj.name}'"
     loaded = load_urdf(_document(world, obj.name, what), what, obj.scale)
     root = _attach(spec, loaded.spec, obj.name, obj.pose, free=not obj.static)
-    _style(root, loaded.friction, obj.friction, obj.color)
+    _style(root, loaded.friction, obj.friction, link_colors(world, obj))
     _exclude_self(spec, root)
     mass = obj.mass if "mass" in obj.model_fields_set and not obj.static else None
     return EntityPlan(obj.name, "object", [("main", str(root.name))], free=not obj.static, total_mass=mass)

@@ -32,6 +32,7 @@ def compile_world(spec: mujoco.MjSpec, plans: Sequence[EntityPlan], welds: Seque
         BackendError: MuJoCo rejects the model; the message names the entity when MuJoCo's message does, else
             the entities just added.
     """
+    _size_arena(spec)
     try:
         model = spec.compile()
     except ValueError as e:
@@ -43,6 +44,23 @@ def compile_world(spec: mujoco.MjSpec, plans: Sequence[EntityPlan], welds: Seque
             scratch = scale_mass(model, layout.entities[plan.name], plan.total_mass, scratch)
     model.eq_data[:, 11] = 0.0  # welds keep the relative pose we give (mj_setConst must not recompute it)
     return model, layout
+
+
+ARENA_PER_GEOM_PAIR = 4
+"""Bytes of MuJoCo's arena per pair of geoms [B]: its collision broadphase takes about 2 x ngeom² bytes at once
+(a world of 3,000 static boxes asked for 18 MB of a default 14.7 MB arena and could not step)."""
+
+ARENA_BASE = 1 << 24
+"""Arena kept for everything else (contacts, constraints) when the geoms' share is set [B]."""
+
+
+def _size_arena(spec: mujoco.MjSpec) -> None:
+    """Give a spec with many geoms an arena its broadphase fits in: ``ARENA_BASE`` plus ``ARENA_PER_GEOM_PAIR``
+    per pair of geoms, when that exceeds MuJoCo's default sizing (about 1,000 geoms and more); smaller worlds keep
+    MuJoCo's own size (and their results, bit for bit)."""
+    pairs = len(spec.geoms) ** 2
+    if ARENA_PER_GEOM_PAIR * pairs > 1 << 22:
+        spec.memory = max(spec.memory, ARENA_BASE + ARENA_PER_GEOM_PAIR * pairs)
 
 
 def scale_mass(model: mujoco.MjModel, e: EntityIndex, mass: float,

@@ -23,6 +23,7 @@ from sigcore.world.plugin_config import validate_plugin
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
     from sigcore.world import World
+    from sigcore.world.models import AgentModel
 
 CLOCK_WALL_LIMIT = 200.0
 """Default most /clock messages per second of wall time [Hz] (see ``docs/ros2.md``, "The /clock policy")."""
@@ -93,12 +94,13 @@ def _selection(words: tuple[str, ...]) -> tuple[str, ...]:
     """``words`` if each is ``all`` (alone), a kind, ``tag:NAME`` or a name (the world's names are checked by
     :func:`sigros_agents`)."""
     if not words:
-        raise ValueError("empty; valid: 'all', or agent names, kinds (robots, objects, humans, agents), tag:NAME")
+        raise ValueError("empty; valid: 'auto', 'all', or agent names, kinds (robots, objects, humans, agents), "
+                         "tag:NAME")
     if "all" in words and len(words) > 1:
         raise ValueError("'all' selects every agent: give it alone, or name agents, kinds or tags")
     for word in words:
-        if not re.fullmatch(r"all|tag:\S+|[A-Za-z][A-Za-z0-9_]*", word):
-            raise ValueError(f"'{word}' is not an agent name, a kind or tag:NAME; valid: 'all', agent names, "
+        if not re.fullmatch(r"all|auto|tag:\S+|[A-Za-z][A-Za-z0-9_]*", word):
+            raise ValueError(f"'{word}' is not an agent name, a kind or tag:NAME; valid: 'auto', 'all', agent names, "
                              "robots, objects, humans, agents, tag:NAME")
     return words
 
@@ -118,8 +120,11 @@ class Ros2Config(FeatureConfig):
         entity_tf_rate: Rate of the ``world -> <entity>`` transforms of objects and humans on /tf [Hz]; 0: off.
         sim_prefix: Prefix of the simulation_interfaces services and action (e.g. ``/sim``; default: root).
         sigros: Create the sig_ros-compatible ``<agent>_<suffix>`` endpoints.
-        sigros_agents: The agents that get them: ``all``, or agent names, kinds (``robots``, ``objects``,
-            ``humans``, ``agents``) and ``tag:NAME``; the others' entities still exist (TF, simulation_interfaces).
+        sigros_agents: The agents that get them: ``auto`` (the default: every agent but the objects without a
+            controller, see :func:`automatic`), ``all``, or agent names, kinds (``robots``, ``objects``,
+            ``humans``, ``agents``) and ``tag:NAME`` (with ``auto`` or without); the others' entities still exist
+            (TF, simulation_interfaces) and are reached through the shared ``/sigcore/sigros/<function>``
+            endpoints.
         standard: Create the idiomatic topics (/clock, /tf, cmd_vel, odom, joint_states, scans).
         qos: Per-topic QoS overrides, by absolute topic name.
     """
@@ -135,8 +140,9 @@ class Ros2Config(FeatureConfig):
     sim_prefix: str = Field(default="", description="namespace of the simulation_interfaces services, e.g. "
                                                     "'/sim' (default: root)")
     sigros: bool = Field(default=True, description="create the sig_ros-compatible <agent>_<suffix> endpoints")
-    sigros_agents: AgentSelection = Field(default=("all",), description="the agents that get <agent>_<suffix> "
-                                          "endpoints: 'all', or agent names, kinds, tag:NAME")
+    sigros_agents: AgentSelection = Field(default=("auto",), description="the agents that get <agent>_<suffix> "
+                                          "endpoints: 'auto' (all but the objects without a controller), 'all', "
+                                          "or agent names, kinds, tag:NAME")
     standard: bool = Field(default=True, description="create the idiomatic topics (/clock, /tf, cmd_vel, ...)")
     qos: QosField = Field(default_factory=dict, description="per-topic QoS overrides, 'TOPIC: WORDS; ...'")
 
@@ -162,6 +168,13 @@ class Ros2Feature(Feature):
         self.config = config
 
 
+def automatic(model: AgentModel) -> bool:
+    """Whether ``auto`` selects the agent ``model``: every robot, human and bodiless ``<agent>``, and an object
+    only when it has a ``controller`` (sig_ros gave endpoints only to agents with a controller; a plain object,
+    a box or a can, is reached through the shared ``/sigcore/sigros/<function>`` endpoints)."""
+    return model.kind != "object" or model.controller is not None
+
+
 def sigros_agents(world: World, words: tuple[str, ...]) -> tuple[set[str], str | None]:
     """The agents of ``world`` that ``words`` (``sigros_agents``) selects, and why a word selects nothing (it
     names no agent, kind or tag of the world; with the valid ones), or None."""
@@ -171,7 +184,9 @@ def sigros_agents(world: World, words: tuple[str, ...]) -> tuple[set[str], str |
     tags = sorted({t for a in world.agents if not isinstance(a, BareAgent) for t in a.tags})
     selected: set[str] = set()
     for word in words:
-        if word in AGENT_KINDS:
+        if word == "auto":
+            selected |= {a.name for a in world.agents if automatic(a)}
+        elif word in AGENT_KINDS:
             selected |= {a.name for a in world.agents if a.kind == AGENT_KINDS[word]}
         elif word.startswith("tag:"):
             tag = word[4:]
@@ -182,20 +197,24 @@ def sigros_agents(world: World, words: tuple[str, ...]) -> tuple[set[str], str |
             selected.add(word)
         else:
             few = ", ".join(list(names)[:6]) + (", ..." if len(names) > 6 else "")
-            return selected, (f"'{word}' is no agent, kind or tag of this world; valid: all, "
+            return selected, (f"'{word}' is no agent, kind or tag of this world; valid: auto, all, "
                               f"{', '.join(AGENT_KINDS)}, tag:NAME, or an agent name ({few})")
     return selected, None
 
 
 def selects(world: World, words: tuple[str, ...], agent: str) -> bool:
     """Whether ``sigros_agents`` (``words``, checked when the world was loaded) selects ``agent`` of ``world``:
-    for an agent added while running, by its name, kind or tags; a word naming an agent that is gone selects
-    nothing."""
+    for an agent added while running, by its name, kind, tags or controller (``auto``); a word naming an agent
+    that is gone selects nothing."""
     model = next((a for a in world.agents if a.name == agent), None)
-    if model is None:
-        return False
+    return model is not None and selects_model(words, model)
+
+
+def selects_model(words: tuple[str, ...], model: AgentModel) -> bool:
+    """Whether ``sigros_agents`` (``words``) selects the agent ``model`` (:func:`selects`, given the model)."""
     tags = () if isinstance(model, BareAgent) else model.tags
-    return any(word == "all" or word == agent or AGENT_KINDS.get(word) == model.kind
+    return any(word == "all" or word == model.name or AGENT_KINDS.get(word) == model.kind
+               or (word == "auto" and automatic(model))
                or (word.startswith("tag:") and word[4:] in tags) for word in words)
 
 

@@ -10,6 +10,9 @@ simulated time (step N, a deferred API call) holds nothing but its header.
 Endpoints come and go while running (agents spawned and deleted): each thread rebuilds its wait set when the set of
 endpoints changed, and :meth:`Receiver.retire` waits until both threads let go of an endpoint before it may be
 destroyed, answering its queued requests first.
+
+Every service added gets a :class:`~sigcore_ros2.responses.Responder` behind its ``send_response``: a response
+whose client is not discovered yet is kept and sent again between steps instead of being dropped by rmw.
 """
 
 from __future__ import annotations
@@ -26,6 +29,8 @@ from rclpy.subscription import Subscription
 
 from sigcore.api.call import log_key
 from sigcore.text import clip
+
+from .responses import Responder
 
 log = logging.getLogger("sigcore.ros2")
 
@@ -46,6 +51,8 @@ class Receiver:
         self._queue: deque[Job] = deque()
         self._queue_lock = threading.Lock()  # appends from the threads vs. removing the jobs of retired endpoints
         self._arrived = threading.Event()
+        self.responder = Responder()
+        """Sends the services' responses; retries those whose client is not matched yet (see responses.py)."""
         self._drained = threading.Event()
         self._stop = False
         self._threads: list[threading.Thread] = []
@@ -65,6 +72,7 @@ class Receiver:
     def add_service(self, srv: Any, callback: Callable[[Any, Any], None]) -> None:
         """``callback(request, header)`` will run on the simulation thread; it answers with
         ``srv.send_response(response, header)``, now or after later steps (before or after :meth:`start`)."""
+        self.responder.install(srv)
         with self._changed:
             self._srvs.append((srv, callback))
             self._version += 1
@@ -103,6 +111,7 @@ class Receiver:
                     refuse(job.entity, *job.args)
                 except Exception as e:  # answering a held request must not stop the simulation
                     _failed(job.endpoint, "refusing a request of a retired endpoint", e)
+        self.responder.forget(gone)  # after the refusals above, which may have been kept too
         if not released:
             log.error("the ROS 2 receiver threads did not let go of %d retired endpoints within %g s; they are "
                       "kept (not destroyed)", len(gone), timeout)
@@ -110,8 +119,8 @@ class Receiver:
 
     @property
     def pending(self) -> bool:
-        """Whether jobs wait for :meth:`drain` (cheap: checked every step)."""
-        return bool(self._queue)
+        """Whether jobs wait for :meth:`drain`, or a kept response is due (cheap: checked every step)."""
+        return bool(self._queue) or self.responder.due
 
     def start(self) -> None:
         """Start two threads: one waits on the services, one on the subscriptions (a wait's cost grows with the
@@ -155,6 +164,7 @@ class Receiver:
                 log.error("ROS 2 callback of %s failed (%s: %s)", endpoint, kind, clip(str(e), 200),
                           exc_info=True, extra=log_key(endpoint, kind))
         self._drained.set()
+        self.responder.retry()
 
     def _run(self, which: int) -> None:
         """The loop of thread ``which`` (0: services, 1: subscriptions); its wait set is rebuilt whenever endpoints

@@ -9,9 +9,10 @@ from typing import TYPE_CHECKING, Any
 
 from rclpy.subscription import Subscription
 
-from sigcore.api.call import call, finish
+from sigcore.api.call import call, finish, log_key
 from sigcore.api.deferred import Deferred
 from sigcore.api.table import ApiEntry
+from sigcore.text import clip
 
 from .convert import fill, ros_type, to_dict
 from .qos import Qos
@@ -24,6 +25,12 @@ if TYPE_CHECKING:
     from .receiver import Receiver
 
 log = logging.getLogger("sigcore.ros2")
+
+SHARED_NAMESPACE = "/sigcore/sigros"
+"""Where the shared, per-name endpoints are: ``/sigcore/sigros/<suffix without its underscore>``."""
+
+NOT_BY_NAME = frozenset({"SendMsgToSrv"})
+"""Request types whose ``name`` field is not the entity (``_send_msg_to_srv``: the service's name)."""
 
 
 @dataclass
@@ -38,8 +45,11 @@ class _Held:
 
 
 class SigRosEndpoints:
-    """Every ``<agent><suffix>`` subscription and service of the world's agents (their published topics are
-    declared by the core: :class:`~sigcore_ros2.publications.PublicationEndpoints` creates them).
+    """Every ``<agent><suffix>`` subscription and service of the selected agents (their published topics are
+    declared by the core: :class:`~sigcore_ros2.publications.PublicationEndpoints` creates them), and one shared
+    endpoint per function whose request names its entity, ``/sigcore/sigros/<function>``, that serves every
+    agent by the request's ``name`` (:meth:`shared_plan`): 35 endpoints for the core's table whatever the number
+    of plain objects, instead of about 45 per object.
 
     Args:
         sim: The simulation.
@@ -60,6 +70,7 @@ class SigRosEndpoints:
         self.missing: set[str] = set()  # API types with no built ROS 2 type (a feature newer than the build)
         self._of: dict[str, list[tuple[str, Any]]] = {}  # agent -> (endpoint name, subscription or service)
         self._create(self.plan(sim, agents))
+        self._create_shared()
 
     def add(self, agents: Collection[str]) -> None:
         """Create the endpoints of ``agents`` (added while running; each under its namespace,
@@ -112,6 +123,31 @@ class SigRosEndpoints:
             self._of.setdefault(agent, []).append((name, entity))
             self.names[name] = entry.ros_type
 
+    def _create_shared(self) -> None:
+        """The shared endpoints (:meth:`shared_plan`); they stay while worlds come and go."""
+        for entry, name in self.shared_plan(self.sim):
+            try:
+                msg_type = ros_type(entry, "srv" if entry.direction == "service" else "msg")
+            except (ImportError, AttributeError):
+                continue  # warned about by _create, or a type no agent of this world uses
+            entity: Any
+            if entry.direction == "subscribe":
+                entity = self.node.create_subscription(msg_type, name, _noop, self.qos.commands(name))
+                self.receiver.add_subscription(entity, self._on_shared_message(entry, name))
+            else:
+                entity = self.node.create_service(msg_type, name, _noop)
+                self.receiver.add_service(entity, self._on_shared_request(entry, name, entity))
+            self.names[name] = entry.ros_type
+
+    @staticmethod
+    def shared_plan(sim: Simulation) -> list[tuple[ApiEntry, str]]:
+        """``(entry, name)`` of every shared endpoint: one per subscribed or service entry whose request has a
+        ``name`` field naming the entity, ``/sigcore/sigros/<suffix without its leading underscore>``; the agent
+        is the request's ``name`` (required there: the shared endpoint has no agent of its own)."""
+        return [(e, f"{SHARED_NAMESPACE}/{e.suffix.lstrip('_')}") for e in sim.api_entries()
+                if e.direction != "publish" and e.request is not None and "name" in e.request.model_fields
+                and e.ros_type not in NOT_BY_NAME]
+
     @staticmethod
     def plan(sim: Simulation, agents: Collection[str] | None = None) -> list[tuple[ApiEntry, str]]:
         """``(entry, agent)`` of every subscription and service (the published entries are the core's
@@ -136,6 +172,54 @@ class SigRosEndpoints:
 
         def handle(request: Any, header: Any) -> None:
             result = call(self.sim, entry, agent, to_dict(request, model))
+            if isinstance(result, Deferred):
+                self.held.append(_Held(entry, agent, result, srv, header))
+                return
+            srv.send_response(fill(srv.srv_type.Response(), result), header)
+
+        return handle
+
+    def _shared_agent(self, entry: ApiEntry, fields: dict[str, Any], endpoint: str) -> tuple[str, str | None]:
+        """The agent a shared endpoint's request names, and why it cannot be served (or None)."""
+        agent = fields.get("name", "")
+        few = ", ".join(list(self.sim.agents)[:5]) + (", ..." if len(self.sim.agents) > 5 else "")
+        if not agent:
+            return agent, (f"{endpoint}: 'name' must name the entity (this shared endpoint serves every agent by "
+                           f"name; agents: {few or 'none'})")
+        handle = self.sim.agents.get(agent)
+        if handle is None:  # refused here, so that each stranger name is not an endpoint of its own in the log
+            return agent, f"{endpoint}: no agent {clip(agent, 80)!r}; agents: {few or 'none'}"
+        if handle.kind not in entry.kinds:
+            return agent, (f"{endpoint}: '{agent}' is a {handle.kind}; {entry.suffix} is for "
+                           f"{', '.join(sorted(entry.kinds))}")
+        return agent, None
+
+    def _on_shared_message(self, entry: ApiEntry, endpoint: str) -> Any:
+        assert entry.request is not None
+        model = entry.request
+
+        def handle(msg: Any) -> None:
+            fields = to_dict(msg, model)
+            agent, why = self._shared_agent(entry, fields, endpoint)
+            if why is not None:
+                log.warning("%s", why, extra=log_key(endpoint, "no agent"))
+                return
+            call(self.sim, entry, agent, fields)  # refusals are logged (once per kind)
+
+        return handle
+
+    def _on_shared_request(self, entry: ApiEntry, endpoint: str, srv: Any) -> Any:
+        assert entry.request is not None
+        model = entry.request
+
+        def handle(request: Any, header: Any) -> None:
+            fields = to_dict(request, model)
+            agent, why = self._shared_agent(entry, fields, endpoint)
+            if why is not None:
+                log.warning("%s", why, extra=log_key(endpoint, "no agent"))
+                _refuse(srv, header, why)
+                return
+            result = call(self.sim, entry, agent, fields)
             if isinstance(result, Deferred):
                 self.held.append(_Held(entry, agent, result, srv, header))
                 return

@@ -23,7 +23,7 @@ from sigcore.api.call import log_key
 from sigcore.text import clip
 from sigcore.transport import Endpoint, Transport, TransportError, publication_endpoints
 
-from .config import Ros2Config, config_for, selects, sigros_agents
+from .config import Ros2Config, config_for, selects_model, sigros_agents
 from .logfilter import OncePerKind
 from .rosargs import RosArgs, parse_ros_args, validate_settings
 
@@ -76,6 +76,7 @@ class Ros2Transport(Transport):
         self.endpoints: dict[str, str] = {}
         """Every endpoint that exists, name -> ROS type (after :meth:`start`; updated when entities come and go)."""
         self._fixed: dict[str, str] = {}  # the action and readiness topic (on their own, after the others)
+        self._index: tuple[object, dict[str, Any]] = (None, {})  # world -> its agents' models by name
 
     # ------------------------------------------------------------------ Transport
     def configure(self, args: list[str]) -> None:
@@ -144,6 +145,9 @@ class Ros2Transport(Transport):
                              "service" if entry.direction == "service" else "topic",
                              f"'{entry.suffix}' of {sim.agents[agent].kind} '{agent}'", agent, "name")
                     for entry, agent in SigRosEndpoints.plan(sim, agents)]
+            out += [Endpoint(name, entry.ros_type, "service" if entry.direction == "service" else "topic",
+                             f"the transport's shared '{entry.suffix}' (every agent, by the request's name)")
+                    for entry, name in SigRosEndpoints.shared_plan(sim)]
         out += publication_endpoints(sim, agents=agents if config.sigros else False)
         if config.standard:
             out += StandardEndpoints.plan(sim)
@@ -312,9 +316,15 @@ class Ros2Transport(Transport):
 
     # ------------------------------------------------------------------ entities added and removed
     def _selected(self, agent: str) -> bool:
-        """Whether ``agent`` gets its sig_ros endpoints (``sigros_agents``; asked for agents spawned later too)."""
-        assert self._sim is not None
-        return selects(self._sim.world, self._selection, agent)
+        """Whether ``agent`` gets its sig_ros endpoints (``sigros_agents``; asked for agents spawned later too).
+        The agents' models are indexed by name once per world (spawning makes a new ``sim.world``), so asking
+        for each of N agents costs O(N), not O(N^2)."""
+        world = self._sim.world if self._sim is not None else None
+        assert world is not None
+        if self._index[0] is not world:
+            self._index = (world, {a.name: a for a in world.agents})
+        model = self._index[1].get(agent)
+        return model is not None and selects_model(self._selection, model)
 
     def _entities_changed(self, change: EntityChange) -> None:
         """Entities were spawned or deleted (simulation thread): create the endpoints of the added agents and

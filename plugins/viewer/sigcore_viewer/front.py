@@ -40,6 +40,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("sigcore.viewer")
 
+AMBIENT = 1.2
+"""The ambient light's intensity, in place of viser's environment map: the colours as bright as with it."""
+
 Post = Callable[[tuple[Any, ...]], None]
 """Sends a request to the simulation's process."""
 
@@ -58,6 +61,12 @@ class Front:
         self._post = post
         self._overlays = dict(overlays)
         server.scene.set_up_direction("+z")
+        # software WebGL (a server or a laptop without a GPU) took seconds to turn viser's default environment map
+        # (an HDR image) into lighting, with the page frozen meanwhile: an ambient light lights the scene instead
+        # (bench/viewer_first_paint.py, docs/viewer.md "The first picture")
+        server.scene.configure_environment_map(hdri=None)
+        server.scene.add_light_ambient("/sigcore_ambient", intensity=AMBIENT)
+        server.scene.configure_default_lights(enabled=True, cast_shadow=False)
         self.nodes = SceneNodes(server, lambda name: post(("select", name)))
         self.panel = Panel(server, post, self._overlays)
         self._mailbox: Snapshot | None = None
@@ -67,6 +76,12 @@ class Front:
         """Snapshots the push thread failed to send (logged: the first, then every 100th)."""
         self._pusher = threading.Thread(target=self._push_loop, name="sigcore-viewer-push", daemon=True)
         self._pusher.start()
+        # how many browsers are connected: a lingering viewer ends when the last one closed
+        server.on_client_connect(lambda _client: self._count())
+        server.on_client_disconnect(lambda _client: self._count())
+
+    def _count(self) -> None:
+        self._post(("clients", len(self._server.get_clients())))
 
     def receive(self, message: tuple[Any, ...]) -> bool:
         """Act on one message of the simulation's process; False when it says stop."""
@@ -136,7 +151,7 @@ class Front:
         """Send what changed in ``snap`` to the browsers, then report it pushed."""
         with self._server.atomic():
             if snap.layout is not None:
-                self.nodes.build(snap.layout, self._overlays)
+                self.nodes.build(snap.layout, self._overlays, snap.poses)
             self.nodes.move(snap.poses, self._overlays["frames"], snap.exact)
             self.nodes.hide(snap.hidden)
             self.nodes.overlays(snap, self._overlays)

@@ -61,6 +61,7 @@ class Panel:
             self.result = gui.add_markdown("")
             self.score = gui.add_markdown("")
             self.events = gui.add_markdown("")
+            self.table = gui.add_markdown("")  # the features' report once the run has ended (the score table)
         self.messages = gui.add_folder("Message")
         with self.messages:
             self.to = gui.add_dropdown("To", (NONE,), initial_value=NONE)
@@ -197,6 +198,12 @@ class Panel:
         result = snap.texts["result"]
         self._text(self.result, "result", f"### {result}" if result else "")
         self._text(self.selection, "selection", snap.texts["selection"])
+        table = snap.texts.get("table", "")
+        self._text(self.table, "table", f"**at the end**\n```text\n{table}\n```" if table else "")
+        if snap.ended and not self._texts.get("ended"):  # the run is over: its controls do nothing any more
+            self._texts["ended"] = "yes"
+            for control in (self.play, self.pause, self.steps, self.step, self.reset, self.pace, self.send):
+                control.disabled = True
         if self._texts.get("pace") != snap.pace:  # the pace the run has (the command line's, another browser's)
             self._texts["pace"] = snap.pace
             if snap.pace in self.pace.options and self.pace.value != snap.pace:

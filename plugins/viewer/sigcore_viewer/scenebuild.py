@@ -142,8 +142,10 @@ class SceneNodes:
         self._parent = np.zeros(0, dtype=int)
         self._hidden = np.zeros(0, dtype=bool)
 
-    def build(self, layout: SceneLayout, overlays: dict[str, bool]) -> None:
-        """Replace every node by those of ``layout``."""
+    def build(self, layout: SceneLayout, overlays: dict[str, bool], poses: np.ndarray | None = None) -> None:
+        """Replace every node by those of ``layout``, each frame created at its pose in ``poses`` (the layout's
+        frames, in ``world``) when given: a browser that connects draws every entity and name where it is from its
+        first picture, not at the origin until the poses that follow arrive."""
         scene = self._server.scene
         scene.remove_by_name(ROOT)
         self._frames, self._labels = [], []
@@ -155,10 +157,12 @@ class SceneNodes:
                        position=(float(centre[0]), float(centre[1]), -0.001))
         self._parent = np.array(layout.parent, dtype=int)
         names = [node_name(i, p) for i, p in enumerate(layout.parent)]
+        at = relative(poses, self._parent) if poses is not None and len(poses) == len(names) else None
         handles: dict[int, Any] = {}
         for i in sorted(range(len(names)), key=lambda i: layout.parent[i] >= 0):  # roots first, then their links
+            pose = {} if at is None else {"position": tuple(at[i, :3].tolist()), "wxyz": tuple(at[i, 3:].tolist())}
             handles[i] = scene.add_frame(names[i], show_axes=overlays["frames"], axes_length=0.12,
-                                         axes_radius=0.006)
+                                         axes_radius=0.006, **pose)
         self._frames = [handles[i] for i in range(len(names))]
         for j, (i, entity, visual) in enumerate(layout.visuals):
             for handle in add_visual(scene, f"{names[i]}/v{j}", visual):
@@ -166,7 +170,7 @@ class SceneNodes:
         for i, entity in layout.labels:
             self._labels.append(scene.add_label(f"{names[i]}/name", entity, position=(0.0, 0.0, 0.12),
                                                 anchor="bottom-center", visible=overlays["names"]))
-        self._sent = np.full((len(layout.frames), 7), np.inf)
+        self._sent = np.full((len(layout.frames), 7), np.inf) if at is None else at.copy()
         self._drawn = np.zeros(len(layout.frames), dtype=bool)  # frames with a visual or a name
         self._drawn[[i for i, _, _ in layout.visuals] + [i for i, _ in layout.labels]] = True
         self._hidden = np.zeros(len(layout.frames), dtype=bool)

@@ -64,6 +64,10 @@ POLL = 0.005
 """Wall seconds between two reads of the person's requests while the simulation runs (a click takes effect within
 this and a step)."""
 
+CLOSED_GRACE = 3.0
+"""Wall seconds without any browser after which a lingering viewer counts its page as closed (a page that reloads
+connects again well within this)."""
+
 OVERLAYS = {"names": True, "frames": False, "scan": False, "contacts": False, "map": True}
 """The overlays and whether each is on at the start."""
 
@@ -102,6 +106,8 @@ class Snapshot:
             moment exactly), not only those that moved more than :data:`~sigcore_viewer.scenebuild.MOVED`.
         hidden: (frames,) frames to hide (a recording's entity not in the world at that moment), or None.
         timeline: A recording's ``(time [s], playing, speed name)``, or None for a live run.
+        ended: The run has ended (:meth:`WebViewer.linger`): the page holds its last moment, the run's controls are
+            disabled, and ``texts["table"]`` holds the features' report (the referee's score table).
     """
 
     step: int
@@ -121,6 +127,7 @@ class Snapshot:
     exact: bool = False
     hidden: np.ndarray | None = None
     timeline: tuple[float, bool, str] | None = None
+    ended: bool = False
 
 
 @dataclass(frozen=True)
@@ -233,6 +240,8 @@ class WebViewer(Viewer):
         self._probe_cond = threading.Condition()
         self._probe_requests: collections.deque[str] = collections.deque()  # node_pose from another thread
         self._player_thread: threading.Thread | None = None  # the thread playing a recording back
+        self._last: Snapshot | None = None  # the newest snapshot taken: what the page holds after the run
+        self._clients = 0  # browsers connected now (as the viewer's process reports)
         self.pushed = 0
         """Snapshots the viewer's process has handed to viser, which sends them to the browsers (as reported)."""
         self.push_observers: list[Callable[[Pushed], None]] = []
@@ -321,12 +330,74 @@ class WebViewer(Viewer):
     def stop(self) -> None:
         sim = self._sim
         if sim is not None:
+            if self.hold_at_end and self._sock is not None:
+                self._snapshot()  # the run's last moment: what the page holds until linger() ends
             sim.publications.disconnect(self._displays)
             if self._world_changed in sim.world_observers:
                 sim.world_observers.remove(self._world_changed)
             if self._displays.restart in sim.reset_observers:
                 sim.reset_observers.remove(self._displays.restart)
             self._sim = None  # service() after stop() does nothing
+        if not self.hold_at_end:
+            self.close()
+
+    @property
+    def clients(self) -> int:
+        """The browsers connected now, as the viewer's process last reported."""
+        return self._clients
+
+    def linger(self, ended: str, lines: list[str], seconds: float | None, done: Callable[[], bool]) -> str:
+        """See :meth:`sigcore.viewer.Viewer.linger`. The page keeps the run's last moment (the scene, the result,
+        the events), with ``ended`` in the run's line and ``lines`` in the panel's "Task" folder; the run's controls
+        are disabled and a person's request is answered with a note. "closed" means a browser had been showing it
+        and none has been for :data:`CLOSED_GRACE` seconds (a reload is not a close)."""
+        try:
+            return self._linger(ended, lines, seconds, done)
+        finally:
+            self.close()
+
+    def _linger(self, ended: str, lines: list[str], seconds: float | None, done: Callable[[], bool]) -> str:
+        snap = self._last
+        if snap is None or self._sock is None:
+            return "gone"
+        state = snap.status.split(" · ", 1)[1] if " · " in snap.status else snap.status
+        snap.status = f"**ended**: {ended} · {state}"
+        snap.texts["table"] = "\n".join(lines)
+        snap.texts["notes"] = "the run has ended: this page shows its last moment; press Enter in the terminal " \
+            "that runs it, or close this page"
+        snap.layout, snap.grid, snap.images, snap.ended = None, None, {}, True
+        self._send(("snap", snap))
+        end = perf_counter() + seconds if seconds is not None else math.inf
+        seen, empty_since = self._clients > 0, None
+        while True:
+            if done():
+                return "done"
+            now = perf_counter()
+            if now >= end:
+                return "time"
+            sock, inbox = self._sock, self._inbox
+            if sock is None or inbox is None:
+                return "gone"
+            select.select([sock], [], [], min(0.1, max(0.0, end - now)))
+            try:
+                messages = inbox.read()
+            except (PeerGone, ValueError):
+                return "gone"
+            for message in messages:
+                if not self._report(message):  # the run's controls mean nothing now: say so
+                    snap.texts["notes"] = (f"the run has ended ({ended}): nothing to {message[0]}; press Enter in "
+                                           "the terminal that runs it, or close this page")
+                    self._send(("snap", snap))
+            self._flush()
+            seen = seen or self._clients > 0
+            if self._clients > 0 or not seen:
+                empty_since = None
+            elif empty_since is None:
+                empty_since = now
+            elif now - empty_since >= CLOSED_GRACE:
+                return "closed"
+
+    def close(self) -> None:
         if self._outbox is not None and self._sock is not None:
             try:
                 self._outbox.put(("stop",))
@@ -470,6 +541,9 @@ class WebViewer(Viewer):
             for observer in list(self.push_observers):
                 observer(report)
             return True
+        if kind == "clients":
+            self._clients = int(message[1])
+            return True
         if kind == "probed":
             with self._probe_cond:
                 self._probed[message[1]] = message[2]
@@ -605,6 +679,7 @@ class WebViewer(Viewer):
                         snap.images[topic] = image
         for observer in list(self.snapshot_observers):
             observer(snap)
+        self._last = snap
         self._send(("snap", snap))
 
     def _describe(self, sim: Simulation, name: str | None) -> str:

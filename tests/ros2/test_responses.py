@@ -1,0 +1,73 @@
+"""Service responses whose client's response reader is not matched (yet) are kept and sent again, not dropped
+silently by rmw (the transport runs in this process, the client in another; see sigcore_ros2/responses.py)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import subprocess
+import sys
+import time
+
+import pytest
+
+pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
+pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
+
+from rosproc import CLIENTS, WORLD, start_in_process  # noqa: E402
+
+
+def test_an_undeliverable_response_is_tried_again_then_dropped_with_a_warning(
+        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    """A client whose response reader never matches (incompatible durability, a real rmw timeout on each send): its
+    requests' responses are kept and tried again (more tries than requests), then dropped after GIVE_UP with a
+    warning naming the service; nothing stays kept, and no service() call of the simulation thread is blocked by the
+    retries for more than 1 s (stated margin: each round stops at its first timeout of 0.1 s)."""
+    from sigcore_ros2 import responses
+
+    monkeypatch.setattr(responses, "GIVE_UP", 1.0)
+    sim, transport, env = start_in_process(monkeypatch, WORLD)
+    sends: list[int] = []
+    requests: list[int] = []
+    original, first = responses._send, responses.Responder.send
+
+    def counting(*args: object) -> bool:
+        sends.append(1)
+        return original(*args)
+
+    def answering(*args: object) -> None:
+        requests.append(1)
+        first(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(responses, "_send", counting)
+    monkeypatch.setattr(responses.Responder, "send", answering)
+    longest = 0.0
+    try:
+        with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
+            proc = subprocess.Popen([sys.executable, str(CLIENTS / "unmatched_call.py"), "4"], env=env, text=True,
+                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+            try:
+                end = None
+                while end is None or time.monotonic() < end:  # this thread is the simulation thread
+                    t = time.monotonic()
+                    transport.service(0.05)
+                    longest = max(longest, time.monotonic() - t)
+                    if end is None and proc.poll() is not None:
+                        end = time.monotonic() + 3.0  # past GIVE_UP + a round for the last request
+                out, err = proc.communicate(timeout=5)
+            finally:
+                if proc.poll() is None:
+                    os.killpg(proc.pid, 9)
+        kept = len(transport._receiver.responder._unsent)
+    finally:
+        transport.stop()
+    assert proc.returncode == 0, err[-3000:]
+    result = json.loads(out.strip().splitlines()[-1])
+    assert result["answered"] is False  # the client could never receive it: the case is real
+    dropped = [r.getMessage() for r in caplog.records if "a response was dropped" in r.getMessage()]
+    assert dropped, [r.getMessage() for r in caplog.records]
+    assert all(m.startswith("/get_simulation_state: ") for m in dropped), dropped
+    assert requests and len(sends) > len(requests), (len(sends), len(requests))  # tried again, not dropped at once
+    assert kept == 0  # nothing is kept past GIVE_UP
+    assert longest < 1.0, longest
