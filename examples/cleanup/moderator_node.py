@@ -23,7 +23,7 @@ import sys
 import time
 
 import rclpy
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sigcore_msgs.msg import OnCollisionMsg, RefereeEvent, RefereeResult
@@ -123,7 +123,7 @@ def main() -> int:
     except RuntimeError as e:
         node.get_logger().error(str(e))
         return 1
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):
         return 0
     finally:
         node.destroy_node()

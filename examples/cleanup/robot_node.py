@@ -22,7 +22,7 @@ import time
 
 import rclpy
 from geometry_msgs.msg import Twist
-from rclpy.executors import SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -315,7 +315,7 @@ def main() -> int:
     try:
         node.run()
         return 0
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):
         return 0  # the simulator ended the task
     except SimulationEnded as e:
         node.get_logger().info(f"the simulation ended ({e}): the task is over")

@@ -134,8 +134,10 @@ def test_an_interrupted_evaluation_resumes(tmp_path: Path) -> None:
     missing episodes, and the first row is unchanged."""
     out = tmp_path / "run"
     args = [str(WORLD), "--controller", "robot_000=cleanup.robot", "--episodes", "3", "--out", str(out)]
+    # SIGINT as a terminal gives it, even where this test runs in a background job (which inherits SIGINT ignored)
     proc = subprocess.Popen([*SIGCORE, "eval", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=ROOT, start_new_session=True)
+                            cwd=ROOT, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and not (out / "episodes.csv").exists():
         time.sleep(0.1)
