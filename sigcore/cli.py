@@ -529,16 +529,13 @@ def run(
         out.print(f"  recording: {bag.path} ({bag.messages} messages; {state}); sigcore bag info {bag.path}")
     if results is not None:
         _write_results(results, {"world": sim.world.name, "world_file": str(world_file), "backend": backend,
-                                 "seed": seed_value, "exit_code": 3 if report.error is not None else
-                                 1 if report.outcome is False else 0, **report.as_dict()})
+                                 "seed": seed_value, "exit_code": report.exit_code, **report.as_dict()})
         out.print(f"  results:  {results}")
     if viewer_obj is not None and viewer_obj.hold_at_end:
         sys.stdout.flush()
         cli_linger.linger(viewer_obj, report, linger_s, terminal, lambda line: err.print(line, soft_wrap=True))
-    if report.error is not None:
-        raise typer.Exit(3)  # the run could not go on (a transport or a bug), the report above says why
-    if report.outcome is False:
-        raise typer.Exit(1)  # the world's task failed (e.g. the referee's result is not 'succeeded')
+    if report.exit_code:  # 3: the run could not go on (a transport or a bug); 1: the world's task failed
+        raise typer.Exit(report.exit_code)
 
 
 def _write_results(path: Path, data: dict[str, object]) -> None:

@@ -50,7 +50,7 @@ def how_it_ended(report: RunReport) -> str:
     why = {None: "ran its --duration / --steps", "request": "stopped by a request (the task's end, or QUITTING)",
            "error": f"stopped by an error: {report.error}"}.get(report.stopped_by, f"stopped by {report.stopped_by}")
     verdict = {None: "no verdict", True: "the task succeeded", False: "the task failed"}[report.outcome]
-    return f"{why}; {verdict}; exit code {3 if report.error is not None else 1 if report.outcome is False else 0}"
+    return f"{why}; {verdict}; exit code {report.exit_code}"
 
 
 def linger(viewer: Viewer, report: RunReport, seconds: float | None, terminal: bool,

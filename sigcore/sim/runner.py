@@ -63,6 +63,12 @@ class RunReport:
     results: dict[str, object] = field(default_factory=dict)
 
     @property
+    def exit_code(self) -> int:
+        """``sigcore run``'s exit code for this run: 3 when it stopped on an error outside user code, 1 when a
+        feature says the task failed, else 0 (the table in ``docs/reliability.md``)."""
+        return 3 if self.error is not None else 1 if self.outcome is False else 0
+
+    @property
     def real_time_factor(self) -> float:
         """Simulated seconds per wall-clock second in this run."""
         return self.sim_time_run / self.wall_time if self.wall_time > 0 else float("inf")
