@@ -96,6 +96,8 @@ def main() -> int:
     except subprocess.TimeoutExpired:
         print(f"run_task: the task did not end within {timeout:g} s of wall time", file=sys.stderr)
         code = 1
+    except KeyboardInterrupt:  # Ctrl-C reaches this process only: the others run in sessions of their own
+        code = _interrupt(sim)
     try:
         nodes[0].wait(timeout=5)  # the moderator ends by itself once it has the referee's result
     except subprocess.TimeoutExpired:
@@ -126,6 +128,21 @@ def _viewer_args(args: argparse.Namespace) -> list[str]:
             out += [f"--{name.replace('_', '-')}", str(value)]
     results = Path(tempfile.mkdtemp(prefix="run_task_")) / "results.json"
     return [*out, "--results", str(results)]
+
+
+def _interrupt(sim: subprocess.Popen[bytes]) -> int:
+    """Ctrl-C: pass it on to the simulator, which ends its run (or the page's wait after it), prints its results
+    and exits with its verdict; the simulator's exit code (130 when it had to be killed)."""
+    print("run_task: interrupted; stopping the simulator", file=sys.stderr)
+    try:
+        if sim.poll() is None:
+            os.killpg(sim.pid, signal.SIGINT)
+        return sim.wait(timeout=30)
+    except (subprocess.TimeoutExpired, KeyboardInterrupt):
+        _kill(sim)
+        return 130
+    except ProcessLookupError:
+        return sim.wait()
 
 
 def _wait(sim: subprocess.Popen[bytes], deadline: float, results: Path | None) -> int:

@@ -58,6 +58,7 @@ class Browser:
         options = webdriver.ChromeOptions()
         for flag in (*FLAGS, f"--window-size={width},{height}", f"--user-data-dir={self._profile}"):
             options.add_argument(flag)
+        options.set_capability("goog:loggingPrefs", {"browser": "ALL"})  # the page's console, for :meth:`console`
         self.driver: Any = webdriver.Chrome(service=Service(str(CHROMEDRIVER)), options=options)
         self.driver.set_page_load_timeout(60)
         self.driver.get(url)
@@ -103,8 +104,39 @@ class Browser:
             if value is not None and value is not False and (not hasattr(value, "__len__") or len(value) > 0):
                 return value
             if time.monotonic() > end:
-                raise AssertionError(f"after {timeout:g} s: {what}; the page says:\n{self.text()[-1500:]}")
+                raise AssertionError(f"after {timeout:g} s: {what}; the page says:\n{self.text()[-1500:]}\n"
+                                     f"the browser: {self.health()}")
             time.sleep(0.2)
+
+    def console(self) -> list[str]:
+        """What the page logged to its console since the last call (level and text, oldest first)."""
+        try:
+            return [f"{entry['level']}: {entry['message']}" for entry in self.driver.get_log("browser")]
+        except Exception as e:  # a driver without logs: say so rather than fail the caller
+            return [f"(no console: {type(e).__name__}: {e})"]
+
+    def health(self) -> dict[str, Any]:
+        """What tells a page that stopped updating from a server that stopped sending: whether the page still
+        draws frames (viser applies its messages in the render loop), whether its WebGL context is lost, whether it
+        is hidden, and its console's warnings and errors."""
+        out: dict[str, Any] = {}
+        try:
+            self.driver.set_script_timeout(10)
+            out["frames"] = self.driver.execute_async_script(
+                "const done = arguments[arguments.length - 1];"
+                "requestAnimationFrame(() => done('drawn'));"
+                "setTimeout(() => done('no frame in 5 s'), 5000);")
+            out["webgl"] = self.driver.execute_script(
+                "const c = document.querySelector('canvas'); if (!c) return 'no canvas';"
+                "const g = c.getContext('webgl2') || c.getContext('webgl');"
+                "return !g ? 'no context' : g.isContextLost() ? 'context lost' : 'ok';")
+            out["hidden"] = self.driver.execute_script("return document.hidden;")
+            out["focus"] = self.driver.execute_script("return document.hasFocus();")
+        except Exception as e:  # the page no longer answers: that is the finding
+            out["script"] = f"{type(e).__name__}: {str(e)[:200]}"
+        out["console"] = [line[:300] for line in self.console()
+                          if not line.startswith("INFO") or "onnect" in line][-15:]  # errors, (dis)connections
+        return out
 
     def dismiss_notifications(self) -> None:
         """Close the notes viser shows over the scene (e.g. "Software WebGL rendering detected")."""

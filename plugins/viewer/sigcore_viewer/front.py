@@ -14,13 +14,22 @@ millisecond) and writes it to the socket. Three threads:
 * **viser's threads** serve the page and call the panel's callbacks, which send the person's requests to the
   simulation as plain tuples (names and numbers).
 
+Whatever changes viser's state (the scene, the panel) runs on **viser's event-loop thread**, handed over by
+:meth:`Front.on_viser`, never on the two threads above. viser wakes its senders with an ``asyncio.Event`` that it
+sets from whichever thread queued the message; set from another thread, in the few instructions between a sender's
+"is it set?" and its registration as a waiter, the wake-up is lost and that sender sleeps for good: the page keeps its
+last picture while the run goes on (1 CI run in 5 of the README's viewer test, under load; reproduced with the window
+widened in ``tests/viewer/test_viewer_front.py``).
+
 When the simulation's process ends (its end of the socket closes) this process stops its server and ends too.
 """
 
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import contextlib
+import faulthandler
 import io
 import logging
 import signal
@@ -40,6 +49,14 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("sigcore.viewer")
 
+HANDOVER = 60.0
+"""At most this long [s] for viser's event loop to run what :meth:`Front.on_viser` hands it (a push is milliseconds;
+a loop that stopped, the server shutting down, is an error)."""
+
+STUCK = 30.0
+"""A push that takes longer than this [s] prints every thread's stack to stderr (a viewer whose page stopped
+updating says where it hangs)."""
+
 AMBIENT = 1.2
 """The ambient light's intensity, in place of viser's environment map: the colours as bright as with it."""
 
@@ -58,17 +75,14 @@ class Front:
 
     def __init__(self, server: Any, post: Post, overlays: dict[str, bool]) -> None:
         self._server = server
+        self._loop = server.get_event_loop()
+        self._loop_thread: int | None = None
+        self._loop_thread = self.on_viser(threading.get_ident)
         self._post = post
         self._overlays = dict(overlays)
-        server.scene.set_up_direction("+z")
-        # software WebGL (a server or a laptop without a GPU) took seconds to turn viser's default environment map
-        # (an HDR image) into lighting, with the page frozen meanwhile: an ambient light lights the scene instead
-        # (bench/viewer_first_paint.py, docs/viewer.md "The first picture")
-        server.scene.configure_environment_map(hdri=None)
-        server.scene.add_light_ambient("/sigcore_ambient", intensity=AMBIENT)
-        server.scene.configure_default_lights(enabled=True, cast_shadow=False)
-        self.nodes = SceneNodes(server, lambda name: post(("select", name)))
-        self.panel = Panel(server, post, self._overlays)
+        # a page left open on this port reconnects as soon as the server listens: even the scene's set-up goes
+        # through viser's thread
+        self.nodes, self.panel = self.on_viser(self._build)
         self._mailbox: Snapshot | None = None
         self._wake = threading.Condition()
         self._stopping = False
@@ -80,6 +94,18 @@ class Front:
         server.on_client_connect(lambda _client: self._count())
         server.on_client_disconnect(lambda _client: self._count())
 
+    def _build(self) -> tuple[SceneNodes, Panel]:
+        server, post = self._server, self._post
+        server.scene.set_up_direction("+z")
+        # software WebGL (a server or a laptop without a GPU) took seconds to turn viser's default environment map
+        # (an HDR image) into lighting, with the page frozen meanwhile: an ambient light lights the scene instead
+        # (bench/viewer_first_paint.py, docs/viewer.md "The first picture")
+        server.scene.configure_environment_map(hdri=None)
+        server.scene.add_light_ambient("/sigcore_ambient", intensity=AMBIENT)
+        server.scene.configure_default_lights(enabled=True, cast_shadow=False)
+        nodes = SceneNodes(server, lambda name: post(("select", name)))
+        return nodes, Panel(server, post, self._overlays, self.on_viser)
+
     def _count(self) -> None:
         self._post(("clients", len(self._server.get_clients())))
 
@@ -90,15 +116,15 @@ class Front:
             self._deliver(message[1])
         elif kind == "selected":
             _, name, pose = message
-            self.panel.selected(name, pose)
+            self.on_viser(self.panel.selected, name, pose)
         elif kind == "overlay":
             _, key, on = message
             self._overlays[key] = bool(on)
-            self.panel.show_switch(key, bool(on))
+            self.on_viser(self.panel.show_switch, key, bool(on))
         elif kind == "probe":
             self._post(("probed", message[1], self.node_pose(message[1])))
         elif kind == "playback":
-            self.panel.playback(message[1])
+            self.on_viser(self.panel.playback, message[1])
         elif kind == "stop":
             return False
         else:
@@ -138,6 +164,7 @@ class Front:
                     return
                 snap, self._mailbox = self._mailbox, None
             assert snap is not None
+            faulthandler.dump_traceback_later(STUCK)
             try:
                 self.push(snap)
             except Exception:  # a browser or viser failure must not stop the viewer: log and go on
@@ -146,9 +173,15 @@ class Front:
                     log.exception("viewer: sending an update failed (%d so far; the simulation goes on)",
                                   self.failures)
                 time.sleep(0.1)
+            finally:
+                faulthandler.cancel_dump_traceback_later()
 
     def push(self, snap: Snapshot) -> None:
-        """Send what changed in ``snap`` to the browsers, then report it pushed."""
+        """Send what changed in ``snap`` to the browsers (on viser's event-loop thread), then report it pushed."""
+        self.on_viser(self._show, snap)
+        self._post(("pushed", snap.step, snap.wall, time.perf_counter()))
+
+    def _show(self, snap: Snapshot) -> None:
         with self._server.atomic():
             if snap.layout is not None:
                 self.nodes.build(snap.layout, self._overlays, snap.poses)
@@ -156,7 +189,32 @@ class Front:
             self.nodes.hide(snap.hidden)
             self.nodes.overlays(snap, self._overlays)
             self.panel.update(snap)
-        self._post(("pushed", snap.step, snap.wall, time.perf_counter()))
+
+    def on_viser(self, fn: Callable[..., Any], *args: Any) -> Any:
+        """Run ``fn(*args)`` on viser's event-loop thread and wait for it: what it returns, or raises.
+
+        Raises:
+            RuntimeError: viser's event loop is closed, or did not run ``fn`` within :data:`HANDOVER` seconds.
+        """
+        if threading.get_ident() == self._loop_thread:  # already there (a callback viser runs on its loop)
+            return fn(*args)
+        done: concurrent.futures.Future[Any] = concurrent.futures.Future()
+
+        def run() -> None:
+            if not done.set_running_or_notify_cancel():
+                return
+            try:
+                done.set_result(fn(*args))
+            except BaseException as e:  # handed back to the waiting thread
+                done.set_exception(e)
+
+        self._loop.call_soon_threadsafe(run)  # RuntimeError when the loop is closed
+        try:
+            return done.result(timeout=HANDOVER)
+        except concurrent.futures.TimeoutError:
+            done.cancel()
+            raise RuntimeError(f"viser's event loop did not run {getattr(fn, '__name__', fn)!r} within "
+                               f"{HANDOVER:g} s") from None
 
     def stop(self) -> None:
         with self._wake:
@@ -177,7 +235,9 @@ def main(argv: list[str] | None = None) -> int:
     # Ctrl-C reaches the whole process group: the simulation's process stops this one (or its end closes)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     logging.basicConfig(level=logging.WARNING, format="sigcore viewer: %(message)s", stream=sys.stderr)
-    logging.getLogger("websockets").setLevel(logging.CRITICAL)  # a connection that is no websocket (a probe)
+    # a connection that is no websocket (a port probe) is no error; a failure serving a browser is
+    logging.getLogger("websockets.server").addFilter(
+        lambda record: record.getMessage() != "opening handshake failed")
     sock = socket.socket(fileno=args.fd)
     sock.setblocking(True)
     lock = threading.Lock()

@@ -31,12 +31,16 @@ class Panel:
         server: The viser server.
         post: Sends a request to the simulation's process.
         overlays: The overlay switches of the viewer's process (changed here; the simulation is told too).
+        on_viser: Runs a callable on viser's event-loop thread (:meth:`~sigcore_viewer.front.Front.on_viser`): what
+            a callback changes in viser goes through it (viser calls the callbacks on its thread pool).
     """
 
-    def __init__(self, server: Any, post: Callable[[tuple[Any, ...]], None], overlays: dict[str, bool]) -> None:
+    def __init__(self, server: Any, post: Callable[[tuple[Any, ...]], None], overlays: dict[str, bool],
+                 on_viser: Callable[..., Any]) -> None:
         gui = server.gui
         self._server = server
         self._post = post
+        self._on_viser = on_viser
         self._overlays = overlays
         self._texts: dict[str, str] = {}
         self._options: dict[str, tuple[str, ...]] = {}
@@ -107,7 +111,7 @@ class Panel:
         if name != NONE:
             self._post(("select", name))
         else:
-            self._hide_drag()
+            self._on_viser(self._hide_drag)
 
     # ------------------------------------------------------------------ a recording
     def playback(self, timeline: Timeline) -> None:

@@ -292,8 +292,9 @@ class WebViewer(Viewer):
         command = [sys.executable, "-m", "sigcore_viewer.front", "--fd", str(theirs.fileno()), "--host", self.host,
                    "--port", str(port), *(f"--overlay={k}={int(v)}" for k, v in self._overlays.items())]
         try:
+            # viser prints its failures (a callback's, a connection's) on stdout: they join the run's stderr
             proc = subprocess.Popen(command, pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
-                                    stdout=subprocess.DEVNULL)
+                                    stdout=_stderr())
         except OSError as e:
             ours.close()
             raise ViewerError(f"the viewer's process could not start: {e}") from None
@@ -927,6 +928,15 @@ def scan_points(layout: SceneLayout, scans: Iterable[dict[str, Any]], poses: np.
                           np.zeros(int(ok.sum()))], axis=1)
         out.append(local @ quat_to_matrix(poses[index, 3:]).T + poses[index, :3])
     return np.vstack(out)
+
+
+def _stderr() -> int:
+    """This process's stderr as a file descriptor for a child's stdout (nowhere when stderr is no file, e.g. under
+    a test's capture: the run's stdout is for its results)."""
+    try:
+        return sys.stderr.fileno()
+    except (AttributeError, OSError, ValueError):
+        return subprocess.DEVNULL
 
 
 def _end(proc: subprocess.Popen[bytes]) -> None:
