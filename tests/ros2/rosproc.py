@@ -96,6 +96,9 @@ def ros_env() -> dict[str, str]:
     env["ROS_DOMAIN_ID"] = str(1 + (os.getpid() * 7 + next(_domains) * 13) % 100)
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     env["PYTHONUNBUFFERED"] = "1"
+    # a client that dies of a signal says where: once, in CI, ready.py died of SIGSEGV (-11) before printing anything
+    # (inside rclpy's or Fast DDS's native code; 90 starts against a running simulator here did not reproduce it)
+    env["PYTHONFAULTHANDLER"] = "1"
     env.pop("ROS_STATIC_PEERS", None)
     return env
 
