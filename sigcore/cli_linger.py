@@ -61,9 +61,11 @@ def linger(viewer: Viewer, report: RunReport, seconds: float | None, terminal: b
         return "not held"
     limit = "" if seconds is None else f" (at most {seconds:g} s)"
     keys = "press Enter here, " if terminal else ""
-    say(f"viewer: the run has ended; the page shows its last moment, the result and the score table{limit}: "
-        f"{keys}close the page or press Ctrl-C to exit")
+    # the handlers first: a signal sent as soon as the person is told it ends the wait must find them (it killed the
+    # process once, in CI, when they came after the message)
     with _signals() as signalled:
+        say(f"viewer: the run has ended; the page shows its last moment, the result and the score table{limit}: "
+            f"{keys}close the page or press Ctrl-C to exit")
         done = _enter(sys.stdin, signalled) if terminal else signalled
         return viewer.linger(how_it_ended(report), report.report_lines, seconds, done)
 
