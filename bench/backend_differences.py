@@ -1,6 +1,7 @@
 """Figures of the differences between physics backends that the conformance suite (tests/backends) exposes.
 
-Usage: .venv/bin/python bench/backend_differences.py [--backends mujoco bullet]
+Usage: .venv/bin/python bench/backend_differences.py [--backends mujoco bullet] [--smoke]
+       --smoke: the costs timed over 2 ray casts and 100 steps, to check that the bench runs (tests/bench).
 
 Runs the same small scenarios as the suite on every registered backend (or the ones named) and prints, per
 backend: drop time error, straight-drive and turn-in-place errors against the kinematic prediction, arc error,
@@ -46,7 +47,8 @@ def _run(b: Backend, seconds: float) -> None:
         b.step()
 
 
-def figures(name: str, tmp: Path) -> dict[str, str]:
+def figures(name: str, tmp: Path, casts: int, steps: int) -> dict[str, str]:
+    """The figures of backend ``name``; the costs are the means over ``casts`` ray casts and ``steps`` steps."""
     cls = plugins.get_backend(name)
 
     def build(body: str) -> Backend:
@@ -114,9 +116,9 @@ def figures(name: str, tmp: Path) -> dict[str, str]:
     dirs = np.stack([np.cos(ang), np.sin(ang), np.zeros(360)], axis=1)
     exp_r = np.array([_room_distance(origin, d) for d in dirs])
     t0 = time.perf_counter()
-    for _ in range(20):
+    for _ in range(casts):
         dist = b.ray_cast(origin, dirs, 10.0, exclude="bot")
-    cost = (time.perf_counter() - t0) / 20
+    cost = (time.perf_counter() - t0) / casts
     out["lidar in room (360 rays): max range error"] = f"{np.abs(dist - exp_r).max() * 1e3:.4f} mm"
     out["ray_cast of 360 rays, excluding own robot"] = f"{cost * 1e6:.0f} us"
 
@@ -131,9 +133,9 @@ def figures(name: str, tmp: Path) -> dict[str, str]:
 
     b = build(robot() + '<object name="o" shape="box" size="0.2 0.2 0.2" pose="0 1 0.1"/>')
     t0 = time.perf_counter()
-    for _ in range(2000):
+    for _ in range(steps):
         b.step()
-    out["step of the bot world"] = f"{(time.perf_counter() - t0) / 2000 * 1e6:.1f} us"
+    out["step of the bot world"] = f"{(time.perf_counter() - t0) / steps * 1e6:.1f} us"
     t0 = time.perf_counter()
     b.reset()
     out["reset (nothing changed)"] = f"{(time.perf_counter() - t0) * 1e3:.2f} ms"
@@ -147,11 +149,14 @@ def figures(name: str, tmp: Path) -> dict[str, str]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--backends", nargs="*", default=sorted(plugins.backends()))
+    ap.add_argument("--smoke", action="store_true", help="the costs over 2 ray casts and 100 steps: a check that "
+                    "the bench runs, not a measurement")
     args = ap.parse_args()
+    casts, steps = (2, 100) if args.smoke else (20, 2000)
     results = {}
     for name in args.backends:
         with tempfile.TemporaryDirectory() as tmp:
-            results[name] = figures(name, Path(tmp))
+            results[name] = figures(name, Path(tmp), casts, steps)
     keys = list(next(iter(results.values())))
     print(f"| figure | {' | '.join(args.backends)} |")
     print(f"|---|{'---|' * len(args.backends)}")

@@ -1,6 +1,7 @@
 """Real-time factor of a bare batch run (``sigcore run WORLD --transport none``), as a user runs it.
 
-Usage: .venv/bin/python bench/batch_rtf.py [WORLD] [--duration S] [--rounds R]
+Usage: .venv/bin/python bench/batch_rtf.py [WORLD] [--duration S] [--rounds R] [--smoke]
+       --smoke: 1 round of 1 simulated second, to check that the bench runs and prints every figure (tests/bench).
 
 Each round runs the real command twice in a subprocess, alternating, so that machine noise hits both alike:
 
@@ -42,7 +43,11 @@ def main() -> None:
     ap.add_argument("world", nargs="?", default=str(ROOT / "worlds" / "cleanup.xml"))
     ap.add_argument("--duration", type=float, default=60.0, help="simulated seconds per run [s]")
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--smoke", action="store_true", help="1 round of 1 simulated second: a check that the bench "
+                    "runs, not a measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.rounds, args.duration = 1, 1.0
     runs: dict[str, list[float]] = {"bare": [], "scripted": []}
     load0 = os.getloadavg()[0]
     for _ in range(args.rounds):

@@ -1,7 +1,8 @@
 """Camera rendering: milliseconds per frame through sigcore against MuJoCo's ``Renderer`` alone, and how much of the
 rendering overlaps physics.
 
-Usage: .venv/bin/python bench/camera.py [WORLD] [--frames N] [--rounds R] [--seconds S]
+Usage: .venv/bin/python bench/camera.py [WORLD] [--frames N] [--rounds R] [--seconds S] [--smoke]
+       --smoke: 1 round of 2 frames, then 1 round of 0.2 simulated s, to check that the bench runs (tests/bench).
 
 Part 1, per frame (the clean-up world, robot_000's head camera pose): sigcore's renderer (``MujocoRenderer``: the
 snapshot of the step, the kinematics of it, the scene, the frustum from the intrinsics, ``mjr_render``, the read-out,
@@ -176,12 +177,16 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=20, help="frames per round and condition (part 1)")
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--seconds", type=float, default=10.0, help="simulated seconds per condition (part 2)")
+    ap.add_argument("--smoke", action="store_true", help="1 round of 2 frames, then 1 round of 0.2 simulated s: a "
+                    "check that the bench runs, not a measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.frames, args.rounds, args.seconds = 2, 1, 0.2
     print(f"renderer: {_gl_renderer()}; {os.cpu_count()} CPUs")
     sim = Simulation(parse_world(args.world), "mujoco")
     sim.step(50)
     per_frame(sim, args.frames, args.rounds)
-    overlap(Path(args.world), args.seconds, max(3, args.rounds // 2))
+    overlap(Path(args.world), args.seconds, 1 if args.smoke else max(3, args.rounds // 2))
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """IK bench: random reachable in-limit targets for each arm of robot_000 (clean-up world) and for arm_0 (arm6 world).
 
-Usage: .venv/bin/python bench/ik.py [--targets N] [--moves M] [--seed S]
+Usage: .venv/bin/python bench/ik.py [--targets N] [--moves M] [--seed S] [--smoke]
+       --smoke: 10 targets and 1 move per arm, to check that the bench runs and prints every figure (tests/bench).
 
 For each arm and for full-pose and position-only targets: N targets, each the tip pose of a random in-limit
 configuration, solved from the previous target's configuration (a random, far start: what a robot sees when it is
@@ -95,7 +96,9 @@ def bench_moves(world_file: str, robot: str, chain_name: str, m: int, rng: np.ra
     chain = r.chain(chain_name)
     entry = next(e for e in sim.api_entries() if e.suffix == "_ik_solve")
     sim.step(10)
-    finals, durations, ok, skipped = [], [], 0, 0
+    finals: list[float] = []
+    durations: list[float] = []
+    ok = skipped = 0
     while len(finals) < m:
         if skipped > 100 * m:
             raise RuntimeError(f"no collision-free target found for {robot}/{chain_name} in {skipped} tries")
@@ -127,7 +130,11 @@ def main() -> None:
     ap.add_argument("--targets", type=int, default=500, help="solver targets per arm and target kind (>= 200)")
     ap.add_argument("--moves", type=int, default=20, help="simulated moves per arm")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--smoke", action="store_true", help="10 targets and 1 move per arm: a check that the bench "
+                    "runs, not a measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.targets, args.moves = 10, 1
     rng = np.random.default_rng(args.seed)
     print(f"solver: {args.targets} random reachable in-limit targets per arm, each solved from the previous "
           "target's configuration; tolerance 1e-4 m (and 1e-3 rad for full poses)")

@@ -1,6 +1,7 @@
 """Reach envelope of the clean-up robot's left arm, measured with the IK solver (the ``_ik_solve`` service).
 
-Usage: .venv/bin/python bench/ik_reach.py [--step S]
+Usage: .venv/bin/python bench/ik_reach.py [--step S] [--smoke]
+       --smoke: a grid step of 0.3 m (--step 0.3), to check that the bench runs and prints every figure (tests/bench).
 
 Targets are points in ``base_link`` (x forward, y left, z up), every ``S`` m (default 0.05) in x and y and every
 0.1 m in z (and z 0.79 m: 3 cm above a can on a table), solved with
@@ -32,7 +33,7 @@ from sigcore.world import parse_world
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOT, ARM = "robot_000", "left"
-KINDS = {"position": {"position_only": True}, "down": {"qw": 1.0}}
+KINDS: dict[str, dict[str, object]] = {"position": {"position_only": True}, "down": {"qw": 1.0}}
 TUCK = [0.0, 0.4, 2.4, -2.1, 0.0]
 """The tuck / carry pose of ``worlds/models/sigbot/README.md`` (pan, pitch, elbow, wrist pitch, wrist roll) [rad]."""
 
@@ -59,7 +60,11 @@ def span(values: list[float]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--step", type=float, default=0.05, help="grid step [m]")
+    parser.add_argument("--smoke", action="store_true", help="a grid step of 0.3 m: a check that the bench runs, "
+                        "not a measurement")
     args = parser.parse_args()
+    if args.smoke:
+        args.step = 0.3
     sim = Simulation(parse_world(ROOT / "worlds" / "cleanup.xml"), "mujoco")
     entry = next(e for e in sim.api_entries() if e.suffix == "_ik_solve")
     step = args.step

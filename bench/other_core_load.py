@@ -1,6 +1,7 @@
 """How much a busy neighbour on the other CPU slows the simulation on this one (a control for viewer_overhead.py).
 
-Usage: .venv/bin/python bench/other_core_load.py [--rounds R] [--steps N]
+Usage: .venv/bin/python bench/other_core_load.py [--rounds R] [--steps N] [--smoke]
+       --smoke: 1 round of 100 steps, to check that the bench runs and prints every figure (tests/bench).
 
 This process (the simulation) is pinned to CPU 0. Three simulations of worlds/cleanup.xml with the scripted robot
 advance in turn, N steps a round, R rounds: ``quiet`` (CPU 1 idle), ``memory`` (a process on CPU 1 sorting and
@@ -32,7 +33,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=8)
     ap.add_argument("--steps", type=int, default=2500)
+    ap.add_argument("--smoke", action="store_true", help="1 round of 100 steps: a check that the bench runs, not a "
+                    "measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.rounds, args.steps = 1, 100
     os.sched_setaffinity(0, {0})
     world = parse_world(ROOT / "worlds" / "cleanup.xml")
     sims = {k: Simulation(world, "mujoco", controllers={"robot_000": "cleanup.robot"})

@@ -1,9 +1,11 @@
 """How a ROS 2 node waits for a service's answer: rclpy's ``spin_until_future_complete`` against an executor of its
 own spun once at a time (the pattern of ``examples/cleanup/robot_node.py``).
 
-Usage: .venv/bin/python bench/rclpy_calls.py [--calls N] [--rounds R]
+Usage: .venv/bin/python bench/rclpy_calls.py [--calls N] [--rounds R] [--smoke]
+       --smoke: 1 round of 5 calls, to check that the bench runs and prints every figure (tests/bench).
 
-Starts ``sigcore run worlds/cleanup.xml --transport ros2 --paused`` (a private ROS_DOMAIN_ID, localhost discovery),
+Starts ``sigcore run worlds/cleanup.xml --transport ros2 --paused`` (a private ROS_DOMAIN_ID of 150-199, away from
+the tests' 1-96; localhost discovery),
 then in this process a node like the example robot's (a best-effort ``/clock`` subscription and the sig_ros
 clients) calls ``robot_000_get_obj_position`` N times per round with each way of waiting, the ways alternating
 for R rounds. Prints the median wall and CPU time per call of each way, and their ratio.
@@ -32,7 +34,11 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--calls", type=int, default=100, help="calls per way and round")
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--smoke", action="store_true", help="1 round of 5 calls: a check that the bench runs, not a "
+                    "measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.rounds, args.calls = 1, 5
     os.environ.update(ROS_DOMAIN_ID=str(150 + os.getpid() % 50), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
     sim = subprocess.Popen([sys.executable, "-m", "sigcore", "run", str(ROOT / "worlds" / "cleanup.xml"),
                             "--transport", "ros2", "--paused", "--quiet"], start_new_session=True,

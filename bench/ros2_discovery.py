@@ -1,6 +1,7 @@
 """Discovery time of the ROS 2 graph: every agent's sig_ros endpoints against ``sigros_agents="robots agents"``.
 
-Usage: .venv/bin/python bench/ros2_discovery.py [WORLD] [--rounds R] [--call SERVICE]
+Usage: .venv/bin/python bench/ros2_discovery.py [WORLD] [--rounds R] [--call SERVICE] [--smoke]
+       --smoke: 1 round, to check that the bench runs and prints every figure (tests/bench).
 
 For each setting, R rounds (alternating): start ``sigcore run WORLD --paused`` (the simulation is idle, only
 discovery is measured), wait for its ``ready:`` line, then start a plain rclpy client process and measure, from
@@ -8,6 +9,8 @@ its ``rclpy.init`` (its imports are not counted), the time until its graph holds
 the transport plans (``Ros2Transport.plan``, the actions' hidden endpoints aside) and until its first call of
 ``SERVICE`` (default ``robot_000_get_obj_position``, asking for the robot itself) is answered. Prints the
 medians and the planned topic and service counts. The setting is given with ``--ros-args -p sigros_agents:=...``.
+Every process runs in one ``ROS_DOMAIN_ID`` of 150-219 (away from the tests' 1-96 and their evaluations' 225-231),
+with discovery on this machine only.
 """
 
 from __future__ import annotations
@@ -100,11 +103,14 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--call", default="robot_000_get_obj_position")
     ap.add_argument("--client", default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--smoke", action="store_true", help="1 round: a check that the bench runs, not a measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.rounds = 1
     if args.client:
         client(args.client, args.call)
         return
-    env = {**os.environ, "ROS_DOMAIN_ID": str(150 + os.getpid() % 80), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    env = {**os.environ, "ROS_DOMAIN_ID": str(150 + os.getpid() % 70), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
     world = Path(args.world)
     results: dict[str, list[dict]] = {name: [] for name in SETTINGS}
     counts = {}

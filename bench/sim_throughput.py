@@ -1,6 +1,7 @@
 """Real-time factor of a world through sigcore against raw ``mj_step`` on the same compiled model, same run.
 
-Usage: .venv/bin/python bench/sim_throughput.py [WORLD] [--steps N] [--rounds R]
+Usage: .venv/bin/python bench/sim_throughput.py [WORLD] [--steps N] [--rounds R] [--smoke]
+       --smoke: 1 round of 200 steps, to check that the bench runs and prints every figure (tests/bench).
 
 Rounds alternate raw and sigcore so that machine noise hits both alike; ratios of medians are reported.
 sigcore's steps include everything a headless run does: contact events (a collision listener is attached), lidar
@@ -22,6 +23,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from sigcore.agent import CollisionEvent
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
 
@@ -33,11 +35,15 @@ def main() -> None:
     ap.add_argument("world", nargs="?", default=str(ROOT / "worlds" / "cleanup.xml"))
     ap.add_argument("--steps", type=int, default=5000, help="steps per round")
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--smoke", action="store_true", help="1 round of 200 steps: a check that the bench runs, not a "
+                    "measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.rounds, args.steps = 1, 200
 
     world = parse_world(args.world)
     sim = Simulation(world, "mujoco")
-    events = []
+    events: list[CollisionEvent] = []
     sim.collision_observers.append(events.append)  # contact events on, as with a transport attached
     model = sim.backend.model  # type: ignore[attr-defined]
     raw = mujoco.MjData(model)

@@ -1,6 +1,7 @@
 """Real-time factor of a world through sigcore on PyBullet against raw ``stepSimulation`` on the same scene, same run.
 
-Usage: .venv/bin/python bench/sim_throughput_bullet.py [WORLD] [--steps N] [--rounds R]
+Usage: .venv/bin/python bench/sim_throughput_bullet.py [WORLD] [--steps N] [--rounds R] [--smoke]
+       --smoke: 1 round of 100 steps, to check that the bench runs and prints every figure (tests/bench).
 
 The raw scene is the same world built by the same backend into a second PyBullet client (same bodies, wheel motors
 and engine parameters; arm joints held by plain ``POSITION_CONTROL`` motors at full force, as raw PyBullet code
@@ -28,6 +29,7 @@ from pathlib import Path
 import numpy as np
 from sigcore_backend_bullet import BulletBackend
 
+from sigcore.agent import CollisionEvent
 from sigcore.geometry import quat_to_matrix
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
@@ -40,13 +42,17 @@ def main() -> None:
     ap.add_argument("world", nargs="?", default=str(ROOT / "worlds" / "cleanup.xml"))
     ap.add_argument("--steps", type=int, default=2000, help="steps per round")
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--smoke", action="store_true", help="1 round of 100 steps: a check that the bench runs, not a "
+                    "measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.rounds, args.steps = 1, 100
 
     import pybullet as pb
 
     world = parse_world(args.world)
     sim = Simulation(world, "bullet")
-    events = []
+    events: list[CollisionEvent] = []
     sim.collision_observers.append(events.append)  # contact events on, as with a transport attached
     raw_backend = BulletBackend()
     raw_backend.build(world)

@@ -1,12 +1,14 @@
 """SLAM accuracy and cost: robot_000 drives two loops of the clean-up room with the ``slam`` feature on.
 
 Usage: .venv/bin/python bench/slam_accuracy.py [--loops N] [--speed V] [--no-refine] [--open-loop]
-           [--odometry-noise F] [--grid-offset D] [--save-map BASE]
+           [--odometry-noise F] [--grid-offset D] [--save-map BASE] [--smoke]
+       --smoke: one loop (--loops 1), to check that the bench runs and prints every figure (tests/bench).
 
-The world is ``worlds/cleanup.xml`` with ``<plugin name="slam" agent="robot_000" .../>`` added to its text in
-memory (the file itself does not enable SLAM). A waypoint follower drives the robot on the ground truth around a
-rectangle that keeps at least 0.35 m from every piece of furniture: (-4, -1) -> (2.8, -1) -> (2.8, 1) -> (-4, 1)
--> (-4, -1), ``--loops`` times (turning in place at the corners, 0.5 m/s on the straights), then it stops.
+The world is ``worlds/cleanup.xml`` with ``<plugin name="slam" agent="robot_000" .../>`` added to its ``<world>``
+element in memory (the file itself does not enable SLAM); the bench stops with a message if the simulation was built
+without the ``slam`` feature. A waypoint follower drives the robot on the ground truth around a rectangle that keeps
+at least 0.35 m from every piece of furniture: (-4, -1) -> (2.8, -1) -> (2.8, 1) -> (-4, 1) -> (-4, -1), ``--loops``
+times (turning in place at the corners, 0.5 m/s on the straights), then it stops.
 
 Figures:
 
@@ -40,6 +42,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import numpy.typing as npt
+from lxml import etree
 from sigcore_slam import Pose2, SlamFeature
 
 from sigcore.geometry import quat_yaw
@@ -56,13 +59,23 @@ BAND = 0.02
 """Ground truth counts geometry that spans the lidar's height +- this [m] (see the module docstring)."""
 
 
-def make_sim(plugin_attributes: str) -> Simulation:
-    """The clean-up world with the slam plugin added in memory."""
+def make_sim(plugin_attributes: dict[str, str]) -> Simulation:
+    """The clean-up world with ``<plugin name="slam" agent="robot_000" .../>`` added in memory as the first child of
+    its ``<world>`` element (whatever that element's attributes).
+
+    Raises:
+        SystemExit: the world has no ``<world>`` root, or the simulation was built without the ``slam`` feature.
+    """
     text = WORLD.read_text()
-    text = text.replace('<world name="cleanup" timestep="0.002" gravity="0 0 -9.81">',
-                        '<world name="cleanup" timestep="0.002" gravity="0 0 -9.81">\n'
-                        f'  <plugin name="slam" agent="{ROBOT}" {plugin_attributes}/>', 1)
-    return Simulation(parse_world(WORLD, text), "mujoco")
+    root = etree.fromstring(text.encode("utf-8"), parser=etree.XMLParser(resolve_entities=False))
+    if root.tag != "world":
+        raise SystemExit(f"{WORLD}: the root element is <{root.tag}>, not <world>: the slam plugin cannot be added")
+    root.insert(0, etree.Element("plugin", {"name": "slam", "agent": ROBOT, **plugin_attributes}))
+    sim = Simulation(parse_world(WORLD, etree.tostring(root, encoding="unicode")), "mujoco")
+    if "slam" not in sim.features:
+        raise SystemExit(f"{WORLD} was built without the slam feature (features: {', '.join(sim.features) or 'none'})"
+                         ": the <plugin name=\"slam\"> added in memory did not get into the world")
+    return sim
 
 
 def ground_truth(sim: Simulation) -> Pose2:
@@ -193,14 +206,16 @@ def main() -> None:
     ap.add_argument("--grid-offset", type=float, default=None,
                     help="shift of the grid's cell boundaries [m] (default: half a cell)")
     ap.add_argument("--save-map", default="", help="write the map as BASE.pgm + BASE.yaml")
+    ap.add_argument("--smoke", action="store_true", help="one loop: a check that the bench runs, not a measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.loops = 1
 
     offset = args.resolution / 2 if args.grid_offset is None else args.grid_offset
     size = 30.0
-    attrs = (f'voxel_size="{args.voxel_size}" resolution="{args.resolution}" size="{size} {size}" '
-             f'origin="{-size / 2 - offset} {-size / 2 - offset}" odometry_noise="{args.odometry_noise}" '
-             f'odometry_guess="{"false" if args.open_loop else "true"}" '
-             f'refine="{"false" if args.no_refine else "true"}"')
+    attrs = {"voxel_size": str(args.voxel_size), "resolution": str(args.resolution), "size": f"{size} {size}",
+             "origin": f"{-size / 2 - offset} {-size / 2 - offset}", "odometry_noise": str(args.odometry_noise),
+             "odometry_guess": "false" if args.open_loop else "true", "refine": "false" if args.no_refine else "true"}
     sim = make_sim(attrs)
     slam = sim.features["slam"]
     assert isinstance(slam, SlamFeature)
@@ -234,7 +249,7 @@ def main() -> None:
                                   f"max {cpu.max():.3f} (this thread only: without other processes' share)",
         f"scans over {period_ms:.0f} ms": f"{int((ms > period_ms).sum())}",
         "real-time factor": f"{sim.time / wall:.1f} (whole run: physics, lidar, SLAM, follower)",
-        "configuration": attrs,
+        "configuration": " ".join(f'{k}="{v}"' for k, v in attrs.items()),
         "map IoU (occupied, observed cells)": f"{iou(slam_occ, truth_occ, observed):.3f}",
         "map IoU, 1-cell tolerance": f"{iou(slam_occ, truth_occ, observed, 1):.3f}",
         "cells occupied: SLAM / truth (observed)": f"{int((slam_occ & observed).sum())} / "

@@ -1,6 +1,7 @@
 """Spawning and deleting while running: latency against a full build, and throughput afterwards (issue 12).
 
-Usage: .venv/bin/python bench/spawn.py [--backends mujoco bullet] [--repeats 5] [--steps 2000]
+Usage: .venv/bin/python bench/spawn.py [--backends mujoco bullet] [--repeats 5] [--steps 2000] [--smoke]
+       --smoke: 1 repeat of 100 steps, to check that the bench runs and prints every figure (tests/bench).
 
 Per backend, on worlds/cleanup.xml:
 
@@ -126,12 +127,18 @@ def sparse_cost(repeats: int, steps: int) -> tuple[float, float]:
 
 
 def arguments(doc: str) -> argparse.Namespace:
-    """``--backends``, ``--repeats`` and ``--steps`` of the run-time change benches (this one and worlds.py)."""
+    """``--backends``, ``--repeats``, ``--steps`` and ``--smoke`` of the run-time change benches (this one and
+    worlds.py); ``--smoke`` sets 1 repeat of 100 steps."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--backends", nargs="+", default=["mujoco", "bullet"])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--steps", type=int, default=2000)
-    return parser.parse_args()
+    parser.add_argument("--smoke", action="store_true", help="1 repeat of 100 steps: a check that the bench runs, "
+                        "not a measurement")
+    args = parser.parse_args()
+    if args.smoke:
+        args.repeats, args.steps = 1, 100
+    return args
 
 
 def main() -> None:

@@ -1,7 +1,8 @@
 """Start-up time against the number of entities, with and without the ROS 2 transport (issue 28, item 9).
 
 Usage: .venv/bin/python bench/startup.py [--counts 30 100 300 1000 3000] [--transports none ros2]
-       [--timeout 120] [--repeats 1] [--sigros-agents WORDS]
+       [--timeout 120] [--repeats 1] [--sigros-agents WORDS] [--smoke]
+       --smoke: 30 boxes only (--counts 30), to check that the bench runs and prints every figure (tests/bench).
 
 For each count N a world of N static boxes (a grid, 0.1 m cubes 0.5 m apart; no robot) is written to a temporary
 directory and ``sigcore run WORLD --steps 10`` is started as a new process, with ``--transport none`` or with the
@@ -10,7 +11,7 @@ given). The figure is the wall time from starting the process to its exit (inter
 the transport's endpoints, 10 steps, closing): what a user waiting for ``sigcore run`` sees. A run that has not
 ended after ``--timeout`` seconds is killed (its process group) and reported as ``> T``. The ROS 2 runs also give
 the number of endpoints the transport plans for the world (``Ros2Transport.plan``). Each ROS 2 run has its own
-``ROS_DOMAIN_ID`` (101-119, away from the tests' 1-100 and ``sigcore eval``'s 120-232) with discovery on this
+``ROS_DOMAIN_ID`` (101-119, away from the tests' 1-96 and ``sigcore eval``'s 120-232) with discovery on this
 machine only. Medians over ``--repeats``; a run that exits with an error is reported as ``exit CODE`` (its stderr
 is printed).
 """
@@ -97,7 +98,11 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=1, help="runs per case (median)")
     parser.add_argument("--sigros-agents", default=None,
                         help="sigros_agents for the ROS 2 runs (default: the world's default)")
+    parser.add_argument("--smoke", action="store_true", help="30 boxes only: a check that the bench runs, not a "
+                        "measurement")
     args = parser.parse_args()
+    if args.smoke:
+        args.counts = [30]
     rows = []
     with tempfile.TemporaryDirectory(prefix="sigcore-startup-") as tmp:
         for count in args.counts:

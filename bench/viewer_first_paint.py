@@ -1,6 +1,7 @@
 """Time from loading the viewer's page to its first useful picture (issue 28).
 
-Usage: .venv/bin/python bench/viewer_first_paint.py [--loads N] [--world WORLD] [--factor F] [--label TEXT]
+Usage: .venv/bin/python bench/viewer_first_paint.py [--loads N] [--world WORLD] [--factor F] [--label TEXT] [--smoke]
+       --smoke: 1 page load (--loads 1), to check that the bench runs and prints every figure (tests/bench).
 
 One ``sigcore run WORLD --transport none --controller robot_000=cleanup.robot --viewer --factor F`` (the clean-up
 task, the scripted robot moving, the viewer sending 30 updates a second) runs in a process of its own; a headless
@@ -152,7 +153,11 @@ def main() -> int:
     ap.add_argument("--timeout", type=float, default=60.0, help="give a load up after this long [s]")
     ap.add_argument("--label", default="", help="a name for this run in the report")
     ap.add_argument("--no-scene-size", action="store_true", help="do not read the initial scene's size")
+    ap.add_argument("--smoke", action="store_true", help="1 page load: a check that the bench runs, not a "
+                    "measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.loads = 1
     port = free_port()
     log = Path(f"/tmp/viewer_first_paint_{os.getpid()}.log")
     with log.open("w") as out:

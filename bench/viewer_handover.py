@@ -1,6 +1,7 @@
 """What handing every push to viser's event-loop thread costs the viewer's process (issue 28).
 
-Usage: .venv/bin/python bench/viewer_handover.py [--pushes N] [--rounds R]
+Usage: .venv/bin/python bench/viewer_handover.py [--pushes N] [--rounds R] [--smoke]
+       --smoke: 1 round of 10 pushes, to check that the bench runs and prints every figure (tests/bench).
 
 The viewer's process used to call viser from its push thread; a lost wake-up in viser (an ``asyncio.Event`` set from
 that thread) could then stop a page's updates for good (docs/viewer.md, "One thread talks to viser"). Now
@@ -41,7 +42,11 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--pushes", type=int, default=300, help="pushes per way and round (default 300)")
     ap.add_argument("--rounds", type=int, default=7, help="rounds (default 7)")
+    ap.add_argument("--smoke", action="store_true", help="1 round of 10 pushes: a check that the bench runs, not a "
+                    "measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.rounds, args.pushes = 1, 10
     sim = Simulation(parse_world(ROOT / "worlds" / "cleanup.xml"), "mujoco")
     layout = layout_of(sim)
     poses = sim.backend.get_poses(layout.parts)

@@ -2,7 +2,8 @@
 
 Usage: .venv/bin/python bench/viewer_overhead.py [WORLD] [--steps N] [--rounds R] [--rate HZ] [--realtime S]
                                                [--no-pin] [--viewer-cpu 0|1] [--controller AGENT=CONTROLLER]
-                                               [--chromedriver PATH]
+                                               [--chromedriver PATH] [--smoke]
+       --smoke: 1 round of 200 steps and 2 s at real time, to check that the bench runs (tests/bench).
 
 WORLD (default worlds/cleanup.xml) runs with the scripted robot (``robot_000=cleanup.robot``) so that it moves.
 One simulation per condition below is built, and all are advanced in lockstep, the same N steps each per round, by
@@ -77,6 +78,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -182,7 +184,7 @@ def _children(pid: int) -> list[int]:
     return out
 
 
-def _pin(pids: list[int | str], cpu: int) -> tuple[int, int, int]:
+def _pin(pids: Sequence[int | str], cpu: int) -> tuple[int, int, int]:
     """Every thread of these processes (``"self"``: this one) on CPU ``cpu`` only, read back after: (processes,
     threads, threads whose affinity is not ``{cpu}``). On Linux an affinity belongs to a thread, and a new thread or
     process inherits its creator's; processes or threads that ended meanwhile are skipped."""
@@ -397,7 +399,12 @@ def feed(world: str, controller: str, rate: float, factor: float) -> None:
     viewer.start(sim)
     print(f"ready {viewer.url}", flush=True)
     done = threading.Event()
-    threading.Thread(target=lambda: (sys.stdin.read(), done.set()), daemon=True).start()
+
+    def wait_for_stdin_to_close() -> None:
+        sys.stdin.read()
+        done.set()
+
+    threading.Thread(target=wait_for_stdin_to_close, daemon=True).start()
     t0, w0 = sim.time, time.perf_counter()
     try:
         while not done.is_set():
@@ -435,7 +442,11 @@ def main() -> None:
                          "a CPU, so that CPU 1 carries what it carries in condition viewer)")
     ap.add_argument("--feed", action="store_true", help=argparse.SUPPRESS)  # this script as the feeder
     ap.add_argument("--chromedriver", default="/usr/bin/chromedriver")
+    ap.add_argument("--smoke", action="store_true", help="1 round of 200 steps, 2 s at real time: a check that the "
+                    "bench runs, not a measurement")
     args = ap.parse_args()
+    if args.smoke:
+        args.rounds, args.steps, args.realtime = 1, 200, 2.0
     if args.feed:
         feed(args.world, args.controller, args.rate, args.feeder_factor)
         return

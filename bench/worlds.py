@@ -1,6 +1,7 @@
 """Replacing the running world (issue 12, item 4): ``load_world`` against building the world from scratch.
 
-Usage: .venv/bin/python bench/worlds.py [--backends mujoco bullet] [--repeats 5] [--steps 2000]
+Usage: .venv/bin/python bench/worlds.py [--backends mujoco bullet] [--repeats 5] [--steps 2000] [--smoke]
+       --smoke: 1 repeat of 100 steps, to check that the bench runs and prints every figure (tests/bench).
 
 Per backend:
 

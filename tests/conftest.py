@@ -1,4 +1,5 @@
-"""Shared fixtures: the core test world on the MuJoCo backend."""
+"""Shared fixtures (the core test world on the MuJoCo backend) and the suite's tiers, workers and order
+(``tests/tiers.py``)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+import tiers
 
 from sigcore import plugins
 from sigcore.sim import Simulation
@@ -35,3 +37,23 @@ def fresh_plugins(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     plugins.reset_for_tests()
     yield
     plugins.reset_for_tests()
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--store-durations", action="store_true",
+                     help="write the seconds of the tests that take 1 s or more to tests/durations.json (the order "
+                          "parallel work is handed out in; tests/tiers.py)")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("--store-durations"):
+        config.pluginmanager.register(tiers.DurationStore(), "sigcore-durations")
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    return tiers.auto_workers()
+
+
+@pytest.hookimpl(tryfirst=True)  # before xdist reads the xdist_group markers
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    tiers.arrange(config, items)

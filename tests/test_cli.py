@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from sigcore.api.docs import api_markdown
 from sigcore.api.interfaces import interface_files
 
@@ -19,6 +21,7 @@ def sigcore(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
                           timeout=120)
 
 
+@pytest.mark.slow
 def test_run_prints_what_ran() -> None:
     """`sigcore run --steps` prints agents, steps, simulated time, wall time and real-time factor."""
     r = sigcore("run", str(WORLD), "--transport", "none", "--steps", "250", "--quiet")
@@ -28,6 +31,7 @@ def test_run_prints_what_ran() -> None:
     assert "simulated: 0.500 s" in r.stdout and "real-time factor" in r.stdout
 
 
+@pytest.mark.slow
 def test_check_reports_located_errors_with_exit_2(tmp_path: Path) -> None:
     """`sigcore check` prints each problem as file:line:column: message, exit code 2, no traceback."""
     bad = tmp_path / "bad.xml"
@@ -40,30 +44,35 @@ def test_check_reports_located_errors_with_exit_2(tmp_path: Path) -> None:
     assert "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_check_ok() -> None:
     """`sigcore check` of a valid world says ok and exits 0."""
     r = sigcore("check", str(WORLD))
     assert r.returncode == 0 and "ok (7 agents" in r.stdout
 
 
+@pytest.mark.slow
 def test_unknown_backend_lists_valid_ones() -> None:
     """An unknown --backend is refused with the installed ones listed."""
     r = sigcore("run", str(WORLD), "--transport", "none", "--backend", "bulet", "--steps", "1")
     assert r.returncode == 2 and "mujoco" in r.stderr and "bulet" in r.stderr
 
 
+@pytest.mark.slow
 def test_missing_world_file() -> None:
     """A missing world file is a usage error, not a traceback."""
     r = sigcore("check", "nosuch.xml")
     assert r.returncode == 2 and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_paused_without_transport_is_refused() -> None:
     """--paused without a transport would never resume: refused with a hint."""
     r = sigcore("run", str(WORLD), "--paused", "--transport", "none")
     assert r.returncode == 2 and "--paused needs a transport" in r.stderr and "--transport none" in r.stderr
 
 
+@pytest.mark.slow
 def test_api_lists_every_agent() -> None:
     """`sigcore api WORLD` lists each agent with its endpoint count (a plain object none over ROS 2: the shared
     /sigcore/sigros/<function> endpoints serve it), the other endpoints and the total."""
@@ -75,6 +84,7 @@ def test_api_lists_every_agent() -> None:
     assert "/tf_static" in r.stdout and "/bot/cmd_vel" in r.stdout
 
 
+@pytest.mark.slow
 def test_plugins_lists_mujoco() -> None:
     """`sigcore plugins` shows the MuJoCo backend with its distribution and version."""
     r = sigcore("plugins")
@@ -93,6 +103,7 @@ def test_interface_files_are_current() -> None:
         assert (pkg / rel).read_text() == text, f"{rel} is stale: run sigcore interfaces"
 
 
+@pytest.mark.slow
 def test_controller_option_attaches_and_validates() -> None:
     """--controller AGENT=NAME attaches a controller; a bad form or an unknown agent is refused with exit 2."""
     r = subprocess.run([sys.executable, "-m", "sigcore", "run", str(WORLD), "--transport", "none", "--steps", "50",
@@ -109,6 +120,7 @@ def test_controller_option_attaches_and_validates() -> None:
     assert r.returncode == 2 and ":" in r.stderr.splitlines()[0] and "cannot import module 'no.such'" in r.stderr
 
 
+@pytest.mark.slow
 def test_pace_options_exclude_each_other() -> None:
     """Two of --fast, --realtime and --factor are refused with exit 2, naming both and the three choices."""
     for flags in (["--fast", "--factor", "2"], ["--realtime", "--factor", "2"], ["--fast", "--realtime"]):
@@ -118,6 +130,7 @@ def test_pace_options_exclude_each_other() -> None:
         assert "--fast (as fast as possible)" in r.stderr and "--factor F" in r.stderr
 
 
+@pytest.mark.slow
 def test_unknown_transport_lists_valid_ones() -> None:
     """An unknown --transport is refused with exit 2, the registered ones listed and 'none' offered."""
     r = sigcore("run", str(WORLD), "--transport", "ros3", "--steps", "5")
@@ -132,6 +145,7 @@ def without_rclpy(tmp_path: Path) -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": str(tmp_path)}
 
 
+@pytest.mark.slow
 def test_without_rclpy_the_default_run_is_bare_and_says_so(tmp_path: Path) -> None:
     """Where rclpy cannot be imported, `sigcore run` says so in one line and runs without a transport, as fast as
     possible; an explicit --transport ros2 or --paused is refused with the reason."""
@@ -143,12 +157,13 @@ def test_without_rclpy_the_default_run_is_bare_and_says_so(tmp_path: Path) -> No
     assert len(lines) == 1 and "transport 'ros2' cannot start: rclpy cannot be imported" in lines[0], r.stderr
     assert "no ROS 2 on this machine" in lines[0] and "running without a transport" in lines[0]
     assert "steps:    50" in r.stdout and "ready:" not in r.stderr
-    for extra in (["--transport", "ros2"], ["--paused"]):
+    for extra in (["--transport", "ros2"], ["--paused"]):  # starts no ROS 2 nodes: refused
         r = subprocess.run([sys.executable, "-m", "sigcore", "run", str(WORLD), "--steps", "5", *extra],
                            capture_output=True, text=True, cwd=ROOT, timeout=120, env=env)
         assert r.returncode == 2 and "rclpy cannot be imported" in r.stderr + r.stdout, r.stderr
 
 
+@pytest.mark.slow
 def test_a_failing_controller_is_named_with_its_agent(tmp_path: Path) -> None:
     """A controller whose constructor raises is reported as that controller of that agent, located in the world
     file, exit 2; not as a backend that cannot build the world."""
@@ -165,6 +180,7 @@ def test_a_failing_controller_is_named_with_its_agent(tmp_path: Path) -> None:
     assert "backend" not in r.stderr and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_a_failing_feature_is_named(tmp_path: Path) -> None:
     """A feature (an installed plugin, found through its entry point) whose constructor raises is reported by name
     at its <plugin> line, exit 2; not as a backend that cannot build the world."""
@@ -189,6 +205,7 @@ def test_a_failing_feature_is_named(tmp_path: Path) -> None:
     assert "backend" not in r.stderr and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_a_world_the_backend_cannot_build_is_reported_as_such(tmp_path: Path) -> None:
     """A mesh the engine cannot use (it passes the core's checks) is reported as the backend failing to build the
     world, at the entity's element (file:line:column), exit 2."""

@@ -50,6 +50,7 @@ def _pip(*args: str, timeout: float) -> subprocess.CompletedProcess[str]:
                           capture_output=True, text=True, timeout=timeout)
 
 
+@pytest.mark.slow
 def test_built_and_installed_wheel_is_found_by_entry_point(tmp_path: Path) -> None:
     """A wheel of sigcore-hello, pip-installed in a new directory, is found with its controller, feature."""
     src = shutil.copytree(EXAMPLE, tmp_path / "src", ignore=shutil.ignore_patterns("build", "*.egg-info"))

@@ -98,6 +98,7 @@ def plain(tmp_path: Path, agent: str = "") -> Path:
 
 
 # ------------------------------------------------------------------ 0
+@pytest.mark.slow
 def test_exit_0_when_the_world_has_no_task(tmp_path: Path) -> None:
     """A run of a world with no feature that gives a verdict exits 0."""
     r = sigcore("run", str(plain(tmp_path)), "--transport", "none", "--steps", "100", "-q")
@@ -105,6 +106,7 @@ def test_exit_0_when_the_world_has_no_task(tmp_path: Path) -> None:
     assert "steps:    100" in r.stdout
 
 
+@pytest.mark.slow
 def test_exit_0_when_the_task_succeeded() -> None:
     """The clean-up task solved by the scripted controller: the referee says succeeded, the run exits 0."""
     r = sigcore("run", str(CLEANUP), "--transport", "none", "--controller", "robot_000=cleanup.robot",
@@ -113,6 +115,7 @@ def test_exit_0_when_the_task_succeeded() -> None:
     assert "referee (cleanup rules): succeeded at t = " in r.stdout
 
 
+@pytest.mark.slow
 def test_exit_0_when_the_run_ends_before_the_task_does() -> None:
     """--duration shorter than the task: the referee says "not finished" (no verdict), the run exits 0."""
     r = sigcore("run", str(CLEANUP), "--transport", "none", "--duration", "1", "-q")
@@ -120,6 +123,7 @@ def test_exit_0_when_the_run_ends_before_the_task_does() -> None:
     assert "referee (cleanup rules): not finished at t = 1.00 s, score 0" in r.stdout
 
 
+@pytest.mark.slow
 def test_exit_0_after_one_sigint_when_the_task_has_not_ended(tmp_path: Path) -> None:
     """One SIGINT ends a running batch run like a stop request: results printed, exit by the verdict (none: 0)."""
     proc = subprocess.Popen([*SIGCORE, "run", str(plain(tmp_path)), "--transport", "none", "--duration", "100000"],
@@ -141,6 +145,7 @@ def test_exit_0_after_one_sigint_when_the_task_has_not_ended(tmp_path: Path) -> 
 
 
 # ------------------------------------------------------------------ 1
+@pytest.mark.slow
 def test_exit_1_when_the_referee_time_limit_comes_first(tmp_path: Path) -> None:
     """The referee's time limit (1 s) reached with nothing done: result time_limit, the run exits 1."""
     world = cleanup_with(tmp_path, time_limit="1")
@@ -150,6 +155,7 @@ def test_exit_1_when_the_referee_time_limit_comes_first(tmp_path: Path) -> None:
     assert "steps:    500" in r.stdout  # stop_on_finish: the run ended with the task, not at 5 s
 
 
+@pytest.mark.slow
 def test_exit_1_when_the_time_limit_equals_the_duration(tmp_path: Path) -> None:
     """--duration equal to the referee's time limit gives the verdict (time_limit, exit 1), not "not finished"."""
     world = cleanup_with(tmp_path, time_limit="2")
@@ -159,6 +165,7 @@ def test_exit_1_when_the_time_limit_equals_the_duration(tmp_path: Path) -> None:
 
 
 # ------------------------------------------------------------------ 2
+@pytest.mark.slow
 @pytest.mark.parametrize(("args", "says"), [
     (["run", "WORLD", "--transport", "none", "--backend", "nosuch"], "nosuch"),
     (["run", "WORLD", "--transport", "none", "--duration", "-1"], "--duration"),
@@ -190,6 +197,7 @@ def install_faulty_transport(tmp_path: Path) -> Path:
 
 
 # ------------------------------------------------------------------ 3
+@pytest.mark.slow
 def test_exit_3_when_the_run_stops_on_an_error_outside_user_code(tmp_path: Path) -> None:
     """A bug in an installed transport plugin while stepping: the report is printed, the error named, exit 3."""
     site = install_faulty_transport(tmp_path)

@@ -229,6 +229,7 @@ def calls(tmp_path: Path) -> int:
 
 
 # ------------------------------------------------------------------ defect 6: markup
+@pytest.mark.slow
 def test_markup_in_a_controller_error_is_printed_as_is(tmp_path: Path) -> None:
     """A controller error with [/tmp/data], [bold] and [s] is printed verbatim; the report is complete, exit 0."""
     controllers(tmp_path)
@@ -239,6 +240,7 @@ def test_markup_in_a_controller_error_is_printed_as_is(tmp_path: Path) -> None:
     assert "steps:    300" in r.stdout and "Traceback" not in r.stderr + r.stdout
 
 
+@pytest.mark.slow
 def test_markup_in_a_plugin_error_is_shown_as_is(tmp_path: Path) -> None:
     """`sigcore plugins` shows a failed plugin's error with its brackets verbatim, FAILED, exit 0."""
     install(tmp_path, "broken", BROKEN_PLUGIN)
@@ -249,6 +251,7 @@ def test_markup_in_a_plugin_error_is_shown_as_is(tmp_path: Path) -> None:
     assert "[red]broken[/red] plugin [/tmp/x]" in table and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_markup_in_feature_summary_and_report_is_printed_as_is(tmp_path: Path) -> None:
     """A feature's summary and report lines with [tags] and [s] are printed verbatim."""
     install(tmp_path, "flaky", FLAKY)
@@ -259,6 +262,7 @@ def test_markup_in_feature_summary_and_report_is_printed_as_is(tmp_path: Path) -
 
 
 # ------------------------------------------------------------------ defect 7: sys.exit
+@pytest.mark.slow
 def test_sys_exit_in_on_action_disables_the_controller(tmp_path: Path) -> None:
     """sys.exit(3) in on_action disables that controller with its agent named; the run goes on to its end."""
     controllers(tmp_path)
@@ -269,6 +273,7 @@ def test_sys_exit_in_on_action_disables_the_controller(tmp_path: Path) -> None:
     assert "steps:    300" in r.stdout and "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_sys_exit_in_a_controller_module_fails_check(tmp_path: Path) -> None:
     """A controller module calling sys.exit(0) at import makes `sigcore check` exit 2 with a located message."""
     (site(tmp_path) / "iso_exits.py").write_text(EXIT_AT_IMPORT)
@@ -280,6 +285,7 @@ def test_sys_exit_in_a_controller_module_fails_check(tmp_path: Path) -> None:
     assert "Traceback" not in r.stderr and "ok" not in r.stdout
 
 
+@pytest.mark.slow
 def test_sys_exit_in_a_plugin_at_import_is_a_failed_plugin(tmp_path: Path) -> None:
     """A plugin calling sys.exit(0) at import is FAILED in `sigcore plugins`; `check` of a world using it exits 2."""
     install(tmp_path, "quitter", EXIT_AT_IMPORT)
@@ -296,6 +302,7 @@ def test_sys_exit_in_a_plugin_at_import_is_a_failed_plugin(tmp_path: Path) -> No
     assert "Traceback" not in r.stderr
 
 
+@pytest.mark.slow
 def test_sys_exit_in_a_plugin_hook_is_logged_and_the_run_goes_on(tmp_path: Path) -> None:
     """sys.exit in a plugin's sigcore_simulation_started hook is logged with the plugin's name; the run ends."""
     install(tmp_path, "flaky", FLAKY)
@@ -306,6 +313,7 @@ def test_sys_exit_in_a_plugin_hook_is_logged_and_the_run_goes_on(tmp_path: Path)
 
 
 # ------------------------------------------------------------------ defect 8: features that fail
+@pytest.mark.slow
 @pytest.mark.parametrize(("fail", "error"), [("init", "RuntimeError: no [/dev/flaky] device"),
                                              ("init-exit", "SystemExit: sys.exit(5) was called")])
 def test_feature_failing_in_its_constructor_is_named_with_its_line(tmp_path: Path, fail: str, error: str) -> None:
@@ -318,6 +326,7 @@ def test_feature_failing_in_its_constructor_is_named_with_its_line(tmp_path: Pat
     assert r.stderr.strip() == f"{path}:4: feature 'flaky' failed while being created: {error}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("fail", "line"), [
     ("step", "feature 'flaky' disabled (step observer at t=0.100 s): RuntimeError: lost [/tmp/data] after 0.1 [s]"),
     ("step-exit", "feature 'flaky' disabled (step observer at t=0.100 s): SystemExit: sys.exit(6) was called"),
@@ -334,6 +343,7 @@ def test_feature_failing_while_running_is_disabled_and_reported(tmp_path: Path, 
     assert "steps:    300" in r.stdout and "Traceback" not in r.stderr + r.stdout
 
 
+@pytest.mark.slow
 def test_feature_failing_to_give_its_verdict_fails_the_run(tmp_path: Path) -> None:
     """A feature whose outcome() raises is reported and the run exits 1: a verdict that cannot be had is no pass."""
     install(tmp_path, "flaky", FLAKY)
@@ -411,6 +421,7 @@ def test_an_observer_no_feature_owns_ends_the_run_with_the_error(sim: Simulation
     assert report.feature_failures == []
 
 
+@pytest.mark.slow
 def test_a_transport_whose_observer_raises_ends_the_run_with_exit_3(tmp_path: Path) -> None:
     """A transport bug while stepping ends `sigcore run` with the report printed, the error named, exit 3."""
     install(tmp_path, "faulty", FAULTY_TRANSPORT)
@@ -424,6 +435,7 @@ def test_a_transport_whose_observer_raises_ends_the_run_with_exit_3(tmp_path: Pa
 
 
 # ------------------------------------------------------------------ defect 9: slow controllers
+@pytest.mark.slow
 def test_a_slow_controller_is_reported_by_name(tmp_path: Path) -> None:
     """A controller taking 0.3 s per call, over a 0.1 s budget (3x margin), is warned about by name and reported;
     it keeps running (at 0 s and every 0.1 s up to 0.6 s: 7 calls)."""
@@ -436,6 +448,7 @@ def test_a_slow_controller_is_reported_by_name(tmp_path: Path) -> None:
     assert calls(tmp_path) == 7 and "steps:    300" in r.stdout
 
 
+@pytest.mark.slow
 def test_a_slow_controller_is_disabled_when_asked(tmp_path: Path) -> None:
     """With --disable-slow-controllers, a controller over the budget is disabled after its first call returned;
     the run goes on to its end."""
@@ -448,6 +461,7 @@ def test_a_slow_controller_is_disabled_when_asked(tmp_path: Path) -> None:
     assert calls(tmp_path) == 1 and "steps:    300" in r.stdout
 
 
+@pytest.mark.slow
 def test_a_fast_controller_is_not_reported(tmp_path: Path) -> None:
     """A controller that returns at once is never reported under the default 1 s budget."""
     controllers(tmp_path)
@@ -456,6 +470,7 @@ def test_a_fast_controller_is_not_reported(tmp_path: Path) -> None:
     assert "budget" not in r.stdout + r.stderr and calls(tmp_path) == 7
 
 
+@pytest.mark.slow
 def test_a_budget_that_is_no_number_of_seconds_is_refused(tmp_path: Path) -> None:
     """--callback-budget nan is refused with exit 2; negative budgets are refused by the library too."""
     r = batch(tmp_path, world(tmp_path), "--callback-budget", "nan")

@@ -22,6 +22,7 @@ def _launch_module() -> ModuleType:
     return module
 
 
+@pytest.mark.slow
 def test_launch_command_runs_the_cli_for_real() -> None:
     """The launch file's command, with paused:=false and extra_args, runs sigcore run to its end (exit 0)."""
     cmd = _launch_module().sigcore_command(str(WORLD), "mujoco", "false", "--transport none --steps 50 -q",

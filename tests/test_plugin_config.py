@@ -81,6 +81,7 @@ def test_every_problem_is_located_at_its_attribute(bad_world: Path) -> None:
     assert str(issues[0]).startswith(f"{bad_world}:2:21: <plugin> attribute 'speed': unknown attribute")
 
 
+@pytest.mark.slow
 def test_sigcore_check_reports_them(bad_world: Path) -> None:
     """`sigcore check` prints the same located problems, one per line, exit code 2, no traceback."""
     r = subprocess.run([sys.executable, "-m", "sigcore", "check", str(bad_world)], capture_output=True, text=True,

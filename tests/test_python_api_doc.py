@@ -27,6 +27,7 @@ def test_the_page_has_examples_with_their_output() -> None:
     assert all(out is not None for _, out in EXAMPLES)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("index", range(len(EXAMPLES)))
 def test_example_runs_and_prints_what_the_page_shows(index: int, tmp_path: Path) -> None:
     """Example number ``index`` exits 0 (its asserts hold) and prints exactly the output shown under it."""

@@ -74,6 +74,7 @@ def test_the_same_seed_gives_the_same_world(world: World) -> None:
     assert apply_seed(world, 5).model_dump() == first.model_copy(update={"seed": 5}).model_dump()
 
 
+@pytest.mark.slow
 def test_the_same_seed_gives_the_same_layout_in_fresh_processes(world: World) -> None:
     """`sigcore check --seed 7` prints the same layout in two processes (different hash seeds, so no set order
     leaks in), the one this process draws; another seed prints another."""
@@ -173,6 +174,7 @@ def test_a_turned_table_keeps_its_top(tmp_path: Path) -> None:
 # ------------------------------------------------------------------------------------------ errors
 
 
+@pytest.mark.slow
 def test_a_region_too_small_gives_a_clear_error(tmp_path: Path) -> None:
     """Three 0.2 m boxes in a 0.1 m square: the second cannot be placed; the error is at its <pose>, names it, the
     region, the draws, what it overlapped, and what to change. A box larger than a table's top says that."""
@@ -390,6 +392,7 @@ def test_the_models_reject_what_the_file_would(tmp_path: Path) -> None:
 # ------------------------------------------------------------------------------------------ running it
 
 
+@pytest.mark.slow
 def test_a_seeded_run_keeps_the_trash_on_the_tables(world: World) -> None:
     """`sigcore run worlds/cleanup_random.xml --seed 3 --steps 200 --transport none` runs and says it drew; the same
     world run through the API for 200 steps leaves every item resting on its table where it was drawn."""
@@ -406,6 +409,7 @@ def test_a_seeded_run_keeps_the_trash_on_the_tables(world: World) -> None:
         assert math.hypot(pose[0] - x, pose[1] - y) < 5e-3, (name, pose[:2], (x, y))
 
 
+@pytest.mark.slow
 def test_the_cli_says_what_the_seed_does(tmp_path: Path) -> None:
     """Without --seed a world with <randomize> runs as written and says so once; --seed on a world without it
     says it sets only the noise seed."""
@@ -418,6 +422,7 @@ def test_the_cli_says_what_the_seed_does(tmp_path: Path) -> None:
     assert sample(parse_world(CLEANUP), 4).agents == parse_world(CLEANUP).agents
 
 
+@pytest.mark.slow
 def test_a_seeded_recording_replays_bitwise(tmp_path: Path, world: World) -> None:
     """`run --seed 3 --record` stores the seed in the `sigcore` metadata; the recording's world (as `sigcore replay`
     and the viewer's playback rebuild it) is the drawn one, its ground truth starts at the drawn poses, and

@@ -21,6 +21,7 @@ from types import ModuleType
 
 import pytest
 import trackers
+from rosdomains import next_domain
 
 import sigcore
 from sigcore import SigcoreError, hookimpl, plugins
@@ -33,13 +34,13 @@ WORLD = ROOT / "tests" / "data" / "sim" / "world.xml"
 CLIENTS = ROOT / "tests" / "ros2" / "clients"
 STARTUP = 90.0
 """Wall seconds a simulation process may take to build the world and start ROS 2 (about 2 s alone)."""
-needs_ros = pytest.mark.skipif(importlib.util.find_spec("rclpy") is None, reason="ROS 2 (rclpy) is not installed")
+needs_ros = pytest.mark.ros2  # skipped where rclpy cannot be imported (tests/conftest.py)
 
 
 def ros_env() -> dict[str, str]:
     """A private ROS domain for this test process, discovery on this machine only, unbuffered output."""
     env = dict(os.environ)
-    env["ROS_DOMAIN_ID"] = str(101 + os.getpid() % 100)
+    env["ROS_DOMAIN_ID"] = str(next_domain())
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     env["PYTHONUNBUFFERED"] = "1"
     env.pop("ROS_STATIC_PEERS", None)

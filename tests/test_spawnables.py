@@ -187,6 +187,7 @@ def test_plugin_spawnable_that_does_not_validate_is_left_out(cleanup: World,
     assert any("'blob' of plugin 'blobs'" in r.message and "shape" in r.message for r in caplog.records)
 
 
+@pytest.mark.slow
 def test_cli_lists_spawnables() -> None:
     """`sigcore spawnables WORLD` prints each spawnable's name, origin and description."""
     r = subprocess.run([sys.executable, "-m", "sigcore", "spawnables", str(CLEANUP)], capture_output=True,

@@ -32,6 +32,7 @@ def _first_frame(path: Path) -> np.ndarray:
     return frame
 
 
+@pytest.mark.slow
 def test_overview_video_has_one_frame_per_period_and_the_run_s_duration(tmp_path: Path) -> None:
     """2 simulated seconds at 25 fps (one frame every 20 steps of 2 ms): 50 frames lasting 2.00 s, 640x480 H.264;
     the first frame has the dark band with white text (time, score) in its top-left corner and the room below."""
@@ -48,6 +49,7 @@ def test_overview_video_has_one_frame_per_period_and_the_run_s_duration(tmp_path
     assert first[200:400].std() > 5  # the scene, not a blank image
 
 
+@pytest.mark.slow
 def test_robot_camera_video_keeps_the_simulated_pace(tmp_path: Path) -> None:
     """The robot's head camera at 30 fps asked: 30 fps is not a whole number of 2 ms steps, so a frame comes every
     17 steps (29.41 fps); 1.5 s (750 steps) give 44 frames and a video within one frame of 1.5 s."""
@@ -60,6 +62,7 @@ def test_robot_camera_video_keeps_the_simulated_pace(tmp_path: Path) -> None:
     assert _first_frame(out).shape == (120, 160, 3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("args", "says"), [
     (["--video-camera", "eyes"], "--video-camera 'eyes' is not a camera of this world; valid: overview, bot/head"),
     (["--video-fps", "0"], "--video-fps 0 is out of range; valid: 0.1 <= fps <= 240"),
@@ -72,6 +75,7 @@ def test_bad_video_options_are_refused_before_the_run(tmp_path: Path, args: list
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_a_missing_folder_or_suffix_is_refused(tmp_path: Path) -> None:
     r = _run("--steps", "10", "--video", str(tmp_path / "nowhere" / "x.mp4"))
     assert r.returncode == 2 and f"no folder {tmp_path / 'nowhere'}" in r.stderr
@@ -79,6 +83,7 @@ def test_a_missing_folder_or_suffix_is_refused(tmp_path: Path) -> None:
     assert r.returncode == 2 and "the file must end in .mp4" in r.stderr
 
 
+@pytest.mark.slow
 def test_an_interrupted_run_leaves_a_readable_video(tmp_path: Path) -> None:
     """SIGINT in the middle of a long run: the run reports and the video holds the frames rendered until then,
     readable, with a duration of frames / fps."""

@@ -130,6 +130,6 @@ def test_ros2_plan_finds_lidar_named_like_a_standard_topic(tmp_path: Path, topic
     """The ROS 2 transport's check refuses a lidar named like the robot's standard topics, at the lidar."""
     transport_module = pytest.importorskip("sigcore_ros2.transport")
     sim = _world(tmp_path, f'<lidar name="{topic}" link="base_laser_link"/>')
-    issues = transport_module.Ros2Transport().check(sim)
+    issues = transport_module.Ros2Transport().check(sim)  # starts no ROS 2 nodes
     assert len(issues) == 1
     assert issues[0].line == 4 and f"'/r/{topic}'" in issues[0].message

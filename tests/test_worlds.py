@@ -305,6 +305,7 @@ def test_run_counts_steps_across_a_world_load(cleanup: World) -> None:
     assert report.sim_time == pytest.approx(60 * 0.004, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_sigcore_worlds_command(tmp_path: Path) -> None:
     """`sigcore worlds` lists the shipped worlds and a folder given; a missing path is named, exit status 2."""
     (tmp_path / "small.xml").write_text(SMALL)

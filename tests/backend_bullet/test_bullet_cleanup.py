@@ -12,6 +12,7 @@ from sigcore.world import parse_world
 ROOT = Path(__file__).parent.parent.parent
 
 
+@pytest.mark.slow
 def test_scripted_cleanup_succeeds_on_bullet() -> None:
     """controller="cleanup.robot" grasps the three items and puts each in its box on PyBullet: 3 x (1000 + 50)
     points, succeeded, no collision, wrong-box or outside penalty (about 25 s wall time)."""

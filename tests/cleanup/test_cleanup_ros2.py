@@ -9,6 +9,9 @@ import sys
 from pathlib import Path
 
 import pytest
+from rosdomains import next_domain
+
+pytestmark = [pytest.mark.ros2, pytest.mark.slow]
 
 pytest.importorskip("rclpy")
 pytest.importorskip("sigcore_msgs")
@@ -23,6 +26,7 @@ def task(tmp_path_factory: pytest.TempPathFactory) -> dict:
     tmp = tmp_path_factory.mktemp("cleanup_ros2")
     log, bag = tmp / "referee.json", tmp / "bag"
     r = subprocess.run([sys.executable, str(ROOT / "examples" / "cleanup" / "run_task.py"), "--lockstep",
+                        "--domain", str(next_domain()),
                         "--timeout", "200", "--referee-log", str(log), "--record", str(bag)], capture_output=True,
                        text=True,
                        timeout=260, cwd=ROOT)

@@ -31,6 +31,8 @@ from sigcore.eval import (
 )
 from sigcore.eval.domains import DomainLease
 
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).parent.parent.parent
 WORLD = ROOT / "worlds" / "cleanup_random.xml"
 SIGCORE = [sys.executable, "-m", "sigcore"]
@@ -131,9 +133,10 @@ def test_controller_episodes_with_the_same_seeds_give_the_same_results(tmp_path:
 
 def test_an_interrupted_evaluation_resumes(tmp_path: Path) -> None:
     """Ctrl-C after the first episode: exit 130, the recorded row kept, --resume named; --resume then runs only the
-    missing episodes, and the first row is unchanged."""
+    missing episodes, and the first row is unchanged (episodes of 5 simulated seconds: the task need not end)."""
     out = tmp_path / "run"
-    args = [str(WORLD), "--controller", "robot_000=cleanup.robot", "--episodes", "3", "--out", str(out)]
+    args = [str(WORLD), "--controller", "robot_000=cleanup.robot", "--episodes", "3", "--duration", "5", "--out",
+            str(out)]
     # SIGINT as a terminal gives it, even where this test runs in a background job (which inherits SIGINT ignored)
     proc = subprocess.Popen([*SIGCORE, "eval", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             cwd=ROOT, start_new_session=True,

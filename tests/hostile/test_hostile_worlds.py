@@ -17,6 +17,8 @@ import pytest
 
 from hostile.worlds import Case, generate
 
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[2]
 CHECK_MANY = Path(__file__).with_name("check_many.py")
 
@@ -117,6 +119,7 @@ def test_run_refuses_hostile_worlds_before_running(cases: list[Case]) -> None:
     assert not wrong, "\n".join(wrong)
 
 
+@pytest.mark.ros2
 def test_check_passes_only_worlds_that_run(cases: list[Case], checked: tuple[dict[str, Any], int]) -> None:
     """`sigcore check` exits 0 only for worlds that `sigcore run --duration 0.1` runs (same transport): no hostile
     world passes, and the shipped worlds pass and run."""

@@ -55,6 +55,7 @@ def test_every_number_attribute_of_the_models_is_swept() -> None:
     assert len(swept) == len(ATTRIBUTES) >= 40
 
 
+@pytest.mark.slow
 def test_check_refuses_each_overflowing_number_at_its_attribute(cases: list[OverflowCase]) -> None:
     """`sigcore check` exits 2 on every world, at the attribute's file:line:column, naming it and the valid range
     (for inf: that the number must be finite)."""
@@ -64,6 +65,7 @@ def test_check_refuses_each_overflowing_number_at_its_attribute(cases: list[Over
     assert not wrong, "\n".join(wrong)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["mujoco", "bullet"])
 def test_run_refuses_each_overflowing_number_without_a_traceback(cases: list[OverflowCase], backend: str) -> None:
     """`sigcore run --transport none --steps 10` on each backend exits 2 with the same located message, before
@@ -74,6 +76,7 @@ def test_run_refuses_each_overflowing_number_without_a_traceback(cases: list[Ove
     assert not wrong, "\n".join(wrong)
 
 
+@pytest.mark.ros2
 def test_the_wheel_velocity_of_the_issue_is_refused_over_ros2(cases: list[OverflowCase]) -> None:
     """`sigcore run` with ROS 2 (where max_wheel_velocity="1e308" ended with OverflowError, exit 3) exits 2 at the
     attribute: 'valid: 0 < max_wheel_velocity <= 1000 [rad/s]'."""
@@ -84,6 +87,8 @@ def test_the_wheel_velocity_of_the_issue_is_refused_over_ros2(cases: list[Overfl
     assert "'1e308' is out of range; valid: 0 < max_wheel_velocity <= 1000 [rad/s]" in result["output"]
 
 
+@pytest.mark.ros2
+@pytest.mark.slow
 def test_the_largest_valid_numbers_still_run(tmp_path: Path) -> None:
     """A world with each formerly unbounded attribute at its new limit passes check and runs 10 steps on MuJoCo and
     PyBullet (and over ROS 2 for the drive's wheel velocity, whose odometry covariance squares it) with exit 0."""

@@ -79,12 +79,14 @@ def cleanup(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
             "every": recorder._every}
 
 
+@pytest.mark.slow
 def test_the_task_ran_to_its_end_while_recording(cleanup: dict) -> None:
     """Recording changes nothing in the run: the task succeeds with the usual score."""
     assert cleanup["report"].summary["referee"]["result"] == "succeeded"
     assert cleanup["report"].summary["referee"]["score"] == 3150
 
 
+@pytest.mark.slow
 def test_every_published_message_is_in_the_bag_with_its_stamp(cleanup: dict) -> None:
     """For every declared topic, the bag holds exactly the messages that were published, in order, each logged at
     the simulated time it was stamped with (the referee's 7 events among them)."""
@@ -98,6 +100,7 @@ def test_every_published_message_is_in_the_bag_with_its_stamp(cleanup: dict) -> 
     assert set(recorded) - set(published) == {GROUND_TRUTH}
 
 
+@pytest.mark.slow
 def test_the_metadata_counts_what_the_file_holds(cleanup: dict) -> None:
     """metadata.yaml (read by rosbags) names every topic with its type hash and counts what rosbags reads."""
     counts = Counter(topic for topic, _, _ in cleanup["messages"])
@@ -107,6 +110,7 @@ def test_the_metadata_counts_what_the_file_holds(cleanup: dict) -> None:
     assert cleanup["connections"]["/referee/events"].msgtype == "sigcore_msgs/msg/RefereeEvent"
 
 
+@pytest.mark.slow
 def test_latched_topics_are_offered_transient_local(cleanup: dict) -> None:
     """/tf_static, robot_description and the referee's result keep their latched QoS, so a player replays them
     latched; the events stay volatile and reliable."""
@@ -118,6 +122,7 @@ def test_latched_topics_are_offered_transient_local(cleanup: dict) -> None:
     assert events.durability.name == "VOLATILE" and events.reliability.name == "RELIABLE"
 
 
+@pytest.mark.slow
 def test_ground_truth_is_at_its_rate_and_ends_at_the_last_step(cleanup: dict) -> None:
     """/sigcore/ground_truth: a TFMessage world -> ground_truth/<frame> for every frame (each robot link too),
     logged and stamped at every 17th step (30 Hz at 2 ms), plus the last step; its last poses are the final ones."""
@@ -138,6 +143,7 @@ def test_ground_truth_is_at_its_rate_and_ends_at_the_last_step(cleanup: dict) ->
         assert [got.rotation.w, got.rotation.x, got.rotation.y, got.rotation.z] == list(pose[3:]), name
 
 
+@pytest.mark.slow
 def test_can_0_is_inside_its_box_at_its_correct_box_event(cleanup: dict) -> None:
     """The ground truth of can_0 nearest to the referee's 'can_0 in trashbox_2' event lies inside trashbox_2."""
     events = [(t, m) for topic, t, m in cleanup["messages"] if topic == "/referee/events"]
@@ -150,6 +156,7 @@ def test_can_0_is_inside_its_box_at_its_correct_box_event(cleanup: dict) -> None
     assert low[0] < can.x < high[0] and low[1] < can.y < high[1] and low[2] < can.z < high[2], (can, low, high)
 
 
+@pytest.mark.slow
 def test_the_world_file_and_its_urdfs_are_attached(cleanup: dict) -> None:
     """The world file and the URDFs it uses are MCAP attachments, byte for byte (read with mcap's reader), and
     the run's facts are a metadata record."""
@@ -164,6 +171,7 @@ def test_the_world_file_and_its_urdfs_are_attached(cleanup: dict) -> None:
     assert metadata["sigcore"]["backend"] == "mujoco" and metadata["sigcore"]["timestep"] == "0.002"
 
 
+@pytest.mark.slow
 def test_bag_info_lists_topics_counts_and_attachments(cleanup: dict) -> None:
     """sigcore bag info on the whole bag: exit 0, the topics with their counts, the times, the attachments."""
     out = subprocess.run([*SIGCORE, "bag", "info", str(cleanup["path"])], capture_output=True, text=True,
@@ -175,6 +183,7 @@ def test_bag_info_lists_topics_counts_and_attachments(cleanup: dict) -> None:
     assert f"End:               {cleanup['end_ns'] / 1e9:.3f}" in out.stdout
 
 
+@pytest.mark.slow
 def test_a_cut_bag_is_reported_not_a_traceback(cleanup: dict, tmp_path: Path) -> None:
     """A recording killed mid-way (no metadata.yaml, its MCAP file cut inside a record): bag info says what is
     wrong, names the file, lists what is readable, and exits 1."""
@@ -192,6 +201,7 @@ def test_a_cut_bag_is_reported_not_a_traceback(cleanup: dict, tmp_path: Path) ->
     assert "Topic: /sigcore/ground_truth" in out.stdout
 
 
+@pytest.mark.slow
 def test_a_foreign_or_missing_bag_is_refused_by_name(tmp_path: Path) -> None:
     """A file that is not MCAP, a directory without one and a missing path: exit 2, one line naming it."""
     (tmp_path / "foreign").mkdir()
@@ -208,6 +218,7 @@ def _run(*args: str, **kwargs: Any) -> subprocess.CompletedProcess[str]:
                           timeout=300, **kwargs)
 
 
+@pytest.mark.slow
 def test_an_existing_directory_is_refused_unless_overwrite(tmp_path: Path) -> None:
     """--record into a directory that exists: exit 2 naming it and --overwrite; --overwrite replaces a recording,
     never a directory holding other files."""
@@ -227,6 +238,7 @@ def test_an_existing_directory_is_refused_unless_overwrite(tmp_path: Path) -> No
     assert out.returncode == 2 and "notes.txt" in out.stderr and (mine / "notes.txt").exists()
 
 
+@pytest.mark.slow
 def test_record_topics_selects_and_a_bad_pattern_is_refused(tmp_path: Path) -> None:
     """--record-topics keeps only the matching topics (and the ground truth); an invalid regex is exit 2 naming
     it; --record-topics without --record is refused."""
@@ -248,6 +260,7 @@ def _limit_file_size() -> None:
     resource.setrlimit(resource.RLIMIT_FSIZE, (400 * 1024, 400 * 1024))
 
 
+@pytest.mark.slow
 def test_a_full_disk_stops_the_recording_not_the_run(tmp_path: Path) -> None:
     """A real write failure (a file size limit, EFBIG) 30 s into a 60 s run: the run goes on to its end, the
     recording says it stopped early and why, and the bag so far is readable by rosbags with metadata.yaml counting
@@ -480,6 +493,7 @@ def test_a_world_load_is_recorded_in_log_order_and_not_replayed(tmp_path: Path) 
                                               "reproduce yet") and "--until 300" in why
 
 
+@pytest.mark.slow
 def test_replay_cli_checks_and_refuses_what_it_cannot_reproduce(tmp_path: Path) -> None:
     """sigcore replay of that recording: exit 0, every ground-truth frame 'bitwise equal', the commands counted;
     the referee's topics, not recorded, said to be not compared; a recording whose input

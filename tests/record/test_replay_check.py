@@ -86,6 +86,7 @@ def task(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
             "final": truth[-1][0] // 2_000_000}
 
 
+@pytest.mark.slow
 def test_an_unaltered_recording_is_reproduced_frame_by_frame_with_the_referee(task: dict[str, Any]) -> None:
     """sigcore replay of the unaltered recording exits 0, says every recorded ground-truth frame (all of them, from
     step 0 to the last) is bitwise equal, and that the score, every event and the result were reproduced."""
@@ -102,6 +103,7 @@ def test_an_unaltered_recording_is_reproduced_frame_by_frame_with_the_referee(ta
     assert "DIVERGED" not in text and "NOT reproduced" not in text
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("frame", "change"), [("ground_truth/can_0", "z + 5 cm"),
                                                ("ground_truth/robot_000/base_link", "x + 1 ulp")])
 def test_a_pose_altered_in_the_middle_fails_the_replay_at_that_frame(task: dict[str, Any], tmp_path: Path,
@@ -142,6 +144,7 @@ def test_a_pose_altered_in_the_middle_fails_the_replay_at_that_frame(task: dict[
     assert f"recorded xyz ({altered[row, 0]:.9g}, {altered[row, 1]:.9g}, {recorded_z})" in text, out.stdout
 
 
+@pytest.mark.slow
 def test_a_score_altered_in_the_recording_is_reported_not_reproduced(task: dict[str, Any], tmp_path: Path) -> None:
     """The recording's last /referee/score message rewritten as 9999: the replay exits 1 saying the score was not
     reproduced, with both values and their time; the ground truth and the events are still reproduced."""
@@ -185,6 +188,7 @@ def _late_command_recording(path: Path, steps: int) -> None:
     recorder.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("steps", [340, 345])
 def test_a_command_applied_after_the_last_step_is_replayed_there(tmp_path: Path, steps: int) -> None:
     """A command a run applied after its last step is noted at that step and recorded; the recorder's last ground

@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from sigcore.record import Recorder
 from sigcore.record.bag import bag_info, iter_messages
 from sigcore.sim import Simulation
@@ -39,6 +41,7 @@ def test_the_file_is_written_by_another_process_and_holds_every_message(tmp_path
     assert recorder.messages == sum(handed.values()) == info.messages > 0
 
 
+@pytest.mark.slow
 def test_a_run_killed_mid_way_leaves_a_complete_bag(tmp_path: Path) -> None:
     """sigcore run --record killed with SIGKILL (no chance to close anything): the writer process sees its input
     end and closes the recording itself: metadata.yaml is written, the file has its summary, and it holds the

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 from referee_worlds import ROOT
 from sigcore_referee import Referee
 
@@ -9,6 +10,7 @@ from sigcore.sim import Simulation, run
 from sigcore.world import parse_world
 
 
+@pytest.mark.slow
 def test_full_task_scores_every_item_in_its_box_without_penalty() -> None:
     """controller="cleanup.robot" grasps the three items and puts each in its box: 3150 points, succeeded, the
     run stopped by the referee in < 150 simulated seconds, no controller failure."""

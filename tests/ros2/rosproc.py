@@ -1,12 +1,11 @@
 """Processes of the ROS 2 transport tests: a simulation process, client processes, a private ROS domain.
 
-Every process runs in its own session and is killed by process group in ``finally``; each module uses its own
-``ROS_DOMAIN_ID`` (derived from the pid) with discovery limited to this machine.
+Every process runs in its own session and is killed by process group in ``finally``; each start uses its own
+``ROS_DOMAIN_ID`` (``tests/rosdomains.py``: a range per xdist worker) with discovery limited to this machine.
 """
 
 from __future__ import annotations
 
-import itertools
 import json
 import os
 import signal
@@ -16,6 +15,8 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+from rosdomains import next_domain
 
 if TYPE_CHECKING:
     import pytest
@@ -30,7 +31,6 @@ WORLD = HERE.parent / "data" / "sim" / "world.xml"
 ALL_AGENTS = ("--ros-args", "-p", "sigros_agents:=all")
 """``sigcore run`` arguments giving every agent its sig_ros endpoints (the default, ``auto``, leaves out the objects
 without a controller)."""
-_domains = itertools.count()
 
 
 def _kill(proc: subprocess.Popen[str]) -> None:
@@ -93,7 +93,7 @@ class SimProcess:
 def ros_env() -> dict[str, str]:
     """The environment of a test's processes: a private domain, discovery on this machine only."""
     env = dict(os.environ)
-    env["ROS_DOMAIN_ID"] = str(1 + (os.getpid() * 7 + next(_domains) * 13) % 100)
+    env["ROS_DOMAIN_ID"] = str(next_domain())
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     env["PYTHONUNBUFFERED"] = "1"
     # a client that dies of a signal says where: once, in CI, ready.py died of SIGSEGV (-11) before printing anything

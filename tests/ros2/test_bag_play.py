@@ -20,6 +20,8 @@ from rosbags.highlevel import AnyReader  # noqa: E402
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
 from rosproc import CLIENTS, WORLD, _kill, ros_env  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 SIGCORE = [sys.executable, "-m", "sigcore"]
 
 

@@ -15,6 +15,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import client_against  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 WORLD = Path(__file__).resolve().parents[1] / "data" / "sim" / "camera.xml"
 STEPS = 1000
 """Steps the client asks for: 2 s at 2 ms, 20 images at 10 Hz."""

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from rosproc import WORLD, start_sim
+
+pytestmark = pytest.mark.ros2
 
 DT_NS = 2_000_000  # the test world's timestep
 

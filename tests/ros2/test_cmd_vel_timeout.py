@@ -18,6 +18,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import CLIENTS, WORLD, _kill, start_sim  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 TIMEOUT = 0.3
 """The robot's ``cmd_vel_timeout`` in the test world [s] (not the default 0.5, to show the attribute is read)."""
 

@@ -17,6 +17,8 @@ from sigcore.sim import Simulation  # noqa: E402
 from sigcore.world import WorldError, parse_world  # noqa: E402
 from sigcore.world.plugin_config import validate_plugin  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 
 def test_qos_overrides_parse() -> None:
     """'TOPIC: words' entries become per-topic overrides; a missing slash is added."""

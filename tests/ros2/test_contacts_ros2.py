@@ -8,6 +8,8 @@ from pathlib import Path
 import pytest
 from rosproc import start_sim
 
+pytestmark = pytest.mark.ros2
+
 WORLD = Path(__file__).parent.parent / "data" / "contacts" / "world.xml"
 DT = 0.002
 

@@ -11,6 +11,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import WORLD, SimProcess, start_sim, wait_until  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 OK, ALREADY = 1, 101
 STOPPED, PLAYING, PAUSED = 0, 1, 2
 DT = 0.002

@@ -16,6 +16,8 @@ pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importabl
 
 from rosproc import CLIENTS, WORLD, SimProcess, _kill, ros_env  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 CLIENT_COUNT = 20
 SPREAD = 2.0
 """The clients start at uniform random offsets in [0, SPREAD] s after ``sigcore run`` is started."""

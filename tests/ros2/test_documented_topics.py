@@ -13,6 +13,8 @@ from rosproc import start_sim  # noqa: E402
 
 from sigcore.world import Robot, parse_world  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 ROOT = Path(__file__).resolve().parents[2]
 CLEANUP = ROOT / "worlds" / "cleanup.xml"
 

@@ -24,6 +24,8 @@ from sigcore.geometry import quat_to_matrix  # noqa: E402
 from sigcore.sim import Simulation  # noqa: E402
 from sigcore.world import parse_world  # noqa: E402
 
+pytestmark = [pytest.mark.ros2, pytest.mark.slow]
+
 ROOT = Path(__file__).resolve().parents[2]
 WORLD = ROOT / "worlds" / "cleanup.xml"
 EXAMPLE = ROOT / "examples" / "ros2" / "find_red_can.py"

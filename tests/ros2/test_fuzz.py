@@ -19,6 +19,8 @@ from test_transport import expected_endpoints  # noqa: E402
 
 from sigcore.api import api_table  # noqa: E402
 
+pytestmark = [pytest.mark.ros2, pytest.mark.slow]
+
 SEED = 17
 REQUESTS = 1200
 """Requests of the campaign (service calls and published messages) [requests]: every endpoint first, then random ones

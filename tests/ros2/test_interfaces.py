@@ -23,6 +23,7 @@ import uuid
 from pathlib import Path
 
 import pytest
+from rosdomains import next_domain
 
 rclpy = pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 
@@ -30,7 +31,7 @@ from rclpy.context import Context  # noqa: E402
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 
 # rosidl's parser (lark-parser 0.12) imports modules deprecated since Python 3.11; not ours to fix.
-pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
+pytestmark = [pytest.mark.ros2, pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")]
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 INTERFACES_DIR = REPO_ROOT / "interfaces"
@@ -126,7 +127,7 @@ def _generated_hashes(pkg: str, kind: str, name: str) -> dict[str, str]:
 
 def _domain_id() -> int:
     """A ROS domain ID for this test run, so parallel or leftover runs do not talk to each other."""
-    return 1 + os.getpid() % 100
+    return next_domain()
 
 
 @pytest.fixture

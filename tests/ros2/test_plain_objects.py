@@ -19,6 +19,8 @@ from sigcore.api import api_table  # noqa: E402
 from sigcore.sim import Simulation  # noqa: E402
 from sigcore.world import parse_world  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 PLAIN = ("cube", "ball", "heavy", "wall")
 """The test world's objects: none has a controller."""
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from rosdomains import next_domain
 
 pytest.importorskip("rclpy")
 pytest.importorskip("sigcore_msgs")
@@ -22,6 +23,8 @@ from tf2_msgs.msg import TFMessage  # noqa: E402
 from sigcore.publish import transform_fields  # noqa: E402
 from sigcore.sim import Simulation  # noqa: E402
 from sigcore.world import parse_world  # noqa: E402
+
+pytestmark = pytest.mark.ros2
 
 ROOT = Path(__file__).parent.parent.parent
 
@@ -45,7 +48,7 @@ def test_fill_message_sets_nested_fields_sequences_and_exact_stamps() -> None:
 
 def test_describe_lists_exactly_the_endpoints_start_creates(monkeypatch: pytest.MonkeyPatch) -> None:
     """Ros2Transport.describe (what `sigcore api` prints) equals the endpoints a started transport has."""
-    monkeypatch.setenv("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(next_domain()))
     monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
     sim = Simulation(parse_world(ROOT / "worlds" / "cleanup.xml"), "mujoco")
     transport = Ros2Transport()

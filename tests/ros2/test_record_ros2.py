@@ -21,6 +21,8 @@ from rosbags.highlevel import AnyReader  # noqa: E402
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
 from rosproc import CLIENTS, WORLD, ros_env, start_sim  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 STEP_NS = 2_000_000
 
 

@@ -17,6 +17,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import CLIENTS, WORLD, start_in_process  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 
 def test_an_undeliverable_response_is_tried_again_then_dropped_with_a_warning(
         monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:

@@ -27,6 +27,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import CLIENTS, _kill, ros_env  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 WAIT = "8"
 """``--wait`` for the commands: discovery here takes up to ~3 s; they go on as soon as the topic appears [s]."""
 

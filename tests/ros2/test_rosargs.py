@@ -12,6 +12,8 @@ pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importabl
 
 from rosproc import WORLD, ros_env, start_sim  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 
 def test_remap_namespace_and_a_rate_parameter(tmp_path: Path) -> None:
     """-r /clock:=/sim_clock moves /clock, -r __ns:=/ns1 moves the relative (sig_ros) names and the node, and

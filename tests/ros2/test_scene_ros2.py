@@ -14,6 +14,8 @@ pytest.importorskip("visualization_msgs")
 from sigcore.sim.description import CUBE, CYLINDER, MESH_RESOURCE, SPHERE, robot_description  # noqa: E402
 from sigcore.world import parse_world  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 DATA = Path(__file__).parent.parent / "data"
 
 WORLD = """<world name="scene" timestep="0.002">

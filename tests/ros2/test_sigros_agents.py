@@ -16,6 +16,8 @@ from sigcore_ros2 import Ros2Transport  # noqa: E402
 from sigcore.sim import Simulation  # noqa: E402
 from sigcore.world import WorldError, parse_world  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 AGENTS = ("bot", "cube", "ball", "heavy", "wall", "man", "moderator")
 
 

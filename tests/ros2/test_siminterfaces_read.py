@@ -14,6 +14,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import start_sim  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 CLEANUP = Path(__file__).resolve().parents[2] / "worlds" / "cleanup.xml"
 OK, FEATURE_UNSUPPORTED, NOT_FOUND, OPERATION_FAILED = 1, 0, 2, 4
 OBJECT, ROBOT, HUMAN, DYNAMIC, STATIC = 0, 1, 2, 4, 5

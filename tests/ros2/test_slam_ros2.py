@@ -7,6 +7,8 @@ from pathlib import Path
 import pytest
 from rosproc import start_sim
 
+pytestmark = pytest.mark.ros2
+
 pytest.importorskip("sigcore_slam")
 
 WORLD = Path(__file__).parent.parent / "slam" / "data" / "box_room.xml"

@@ -22,6 +22,8 @@ from sigcore.sim.simulation import Simulation  # noqa: E402
 from sigcore.sim.spawn import SpawnRequest  # noqa: E402
 from sigcore.world import parse_world  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 BOX = '<object shape="box" size="0.1 0.1 0.1"/>'
 
 

@@ -15,6 +15,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import ALL_AGENTS, WORLD, client_against  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 SIGBOT = Path(__file__).resolve().parents[2] / "worlds" / "models" / "sigbot" / "sigbot.urdf"
 OK, NOT_FOUND, OPERATION_FAILED = 1, 2, 4
 NAME_NOT_UNIQUE, NO_RESOURCE, NAMESPACE_INVALID, RESOURCE_PARSE_ERROR, MISSING_ASSETS, INVALID_POSE = \

@@ -13,6 +13,8 @@ from rosproc import WORLD, start_sim, wait_until  # noqa: E402
 
 from sigcore.sim.startgate import WaitFor  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 
 def test_a_node_started_2_s_late_receives_clock_from_zero(tmp_path: Path) -> None:
     """With --wait-for /clock, a /clock subscriber started 2 s after the simulation is up gets t = 0 first, then

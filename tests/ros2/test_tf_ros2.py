@@ -15,6 +15,8 @@ from sigcore.geometry import quat_conj, quat_mul, quat_rotate
 from sigcore.sim.odometry_covariance import odometry_covariance
 from sigcore.world import parse_world
 
+pytestmark = pytest.mark.ros2
+
 WORLD = Path(__file__).parent.parent.parent / "worlds" / "cleanup.xml"
 SIM_WORLD = Path(__file__).parent.parent / "data" / "sim" / "world.xml"
 ROBOT = "robot_000"

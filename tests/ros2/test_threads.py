@@ -17,6 +17,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import CLIENTS, WORLD, start_in_process  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 
 def test_a_raising_executor_callback_is_logged_once_and_the_executor_serves_on(
         monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:

@@ -18,6 +18,8 @@ from rosproc import WORLD, SimProcess  # noqa: E402
 from sigcore.api import api_table  # noqa: E402
 from sigcore.world import parse_world  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 DT = 0.002
 
 

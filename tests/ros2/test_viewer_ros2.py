@@ -23,6 +23,8 @@ import pytest
 from rosproc import CLIENTS, SimProcess, _kill, start_sim
 from sigcore_viewer.browser import Browser, missing
 
+pytestmark = [pytest.mark.ros2, pytest.mark.browser]
+
 CLEANUP = Path(__file__).resolve().parents[2] / "worlds" / "cleanup.xml"
 
 if os.environ.get("SIGCORE_NO_BROWSER"):

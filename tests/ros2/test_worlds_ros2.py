@@ -15,6 +15,8 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 
 from rosproc import ALL_AGENTS, WORLD, start_sim, wait_until  # noqa: E402
 
+pytestmark = pytest.mark.ros2
+
 WORLDS = Path(__file__).resolve().parents[2] / "worlds"
 CLEANUP, ARM6 = WORLDS / "cleanup.xml", WORLDS / "arm6.xml"
 OK, NOT_FOUND, INCORRECT_STATE, OPERATION_FAILED = 1, 2, 3, 4

@@ -37,6 +37,7 @@ def test_registered_as_the_slam_feature() -> None:
     assert plugins.get_feature("slam") is SlamFeature
 
 
+@pytest.mark.slow
 def test_ate_on_a_short_route_below_1cm(room_sim: Simulation) -> None:
     """Driving 10 m with turns in place, the SLAM position RMSE against ground truth stays below 1 cm (2.4 mm)."""
     slam = _slam(room_sim)
@@ -142,6 +143,7 @@ def test_world_without_the_plugin_pays_nothing() -> None:
     assert len(with_slam.scan_observers) == 1 and len(with_slam._step_observers) == 1
 
 
+@pytest.mark.slow
 def test_loading_plugins_does_not_import_kiss_icp() -> None:
     """Discovering the plugin (what every sigcore run does) imports neither kiss-icp nor the feature's work."""
     code = ("import sys; from sigcore import plugins; assert plugins.get_feature('slam').name == 'slam'; "

@@ -62,6 +62,7 @@ def test_line_map_recovers_an_offset_against_two_walls() -> None:
     assert (refined.x, refined.y, refined.yaw) == pytest.approx((truth.x, truth.y, truth.yaw), abs=1e-3)
 
 
+@pytest.mark.slow
 def test_numba_loaded_only_with_a_grid() -> None:
     """Loading the plugin does not import numba (a world without SLAM pays nothing for it); a grid does."""
     import subprocess

@@ -133,6 +133,8 @@ def view(recording: Path, browser_ready: None) -> Iterator[View]:
 
 
 # ---------------------------------------------------------------------- in a browser
+@pytest.mark.slow
+@pytest.mark.browser
 def test_the_panel_is_a_player_and_scrubbing_shows_the_texts_of_that_moment(view: View) -> None:
     """The panel is a player: a time slider over the 40 s, play and pause, speeds, to start and to end; step, reset,
     the pace and messages are gone, dragging is disabled. Scrubbing shows the score and events of that moment: the
@@ -165,6 +167,8 @@ def test_the_panel_is_a_player_and_scrubbing_shows_the_texts_of_that_moment(view
         assert "no events yet" in page.text() and "score: 0" in page.text()
 
 
+@pytest.mark.slow
+@pytest.mark.browser
 def test_two_browsers_share_the_playback_and_play_advances_the_time(view: View) -> None:
     """A second browser sees the moment the first one scrubbed to; the first one closing changes nothing; in the
     second, Play at 10x plays to the end and stops there (at 1x that would take 27 s, more than the 20 s allowed),
@@ -196,6 +200,8 @@ def test_two_browsers_share_the_playback_and_play_advances_the_time(view: View) 
         first.close()
 
 
+@pytest.mark.slow
+@pytest.mark.browser
 def test_scrubbing_puts_each_node_where_the_ground_truth_has_it(recording: Path, browser_ready: None) -> None:
     """The viewer plays in this process (its viewer process and viser server its own), a browser scrubs: at t = 0 and
     t = 30 s robot_000's base node, can_0's node and the left hand (composed from its node under the base) are where
@@ -258,6 +264,7 @@ def test_scrubbing_puts_each_node_where_the_ground_truth_has_it(recording: Path,
 
 
 # ---------------------------------------------------------------------- without a browser
+@pytest.mark.slow
 def test_the_texts_are_those_the_live_viewer_showed(tmp_path: Path) -> None:
     """A run recorded while a live viewer showed it, reset at 20 s (after the first grasp): at the moment of every
     snapshot the live viewer took, the playback's score, events and result are the same texts (the reset cleared the
@@ -294,6 +301,7 @@ def test_the_texts_are_those_the_live_viewer_showed(tmp_path: Path) -> None:
     assert any(texts["events"] == "no events yet" for step, texts in live if step > reset_step)  # cleared
 
 
+@pytest.mark.slow
 def test_the_ground_truth_is_read_exactly_and_a_cut_recording_up_to_its_cut(recording: Path,
                                                                              tmp_path: Path) -> None:
     """Every frame's pose at every ground-truth message is bit for bit what the recorder wrote (as the core's replay
@@ -383,6 +391,7 @@ def _view(path: Path) -> subprocess.CompletedProcess[str]:
                           text=True, cwd=ROOT, timeout=60, start_new_session=True)
 
 
+@pytest.mark.slow
 def test_a_recording_that_cannot_be_shown_is_refused_naming_what_is_missing(recording: Path,
                                                                              tmp_path: Path) -> None:
     """``sigcore view`` of a directory that holds no recording, of a recording without its attachments (the world

@@ -12,6 +12,8 @@ import threading
 import time
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 CLEANUP = ROOT / "worlds" / "cleanup.xml"
 
@@ -27,6 +29,7 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
+@pytest.mark.slow
 def test_run_with_the_viewer_says_its_url_and_runs() -> None:
     port = free_port()
     done = sigcore("run", str(CLEANUP), "--transport", "none", "--viewer", "--viewer-port", str(port), "--steps",
@@ -37,6 +40,7 @@ def test_run_with_the_viewer_says_its_url_and_runs() -> None:
     assert "viser" not in done.stdout  # viser's own banner is not printed: sigcore says the URL
 
 
+@pytest.mark.slow
 def test_a_taken_port_is_refused_before_the_run() -> None:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -49,6 +53,7 @@ def test_a_taken_port_is_refused_before_the_run() -> None:
     assert "--viewer-port" in done.stderr and "steps:" not in done.stdout
 
 
+@pytest.mark.slow
 def test_paused_needs_a_transport_or_a_viewer() -> None:
     done = sigcore("run", str(CLEANUP), "--transport", "none", "--paused")
     assert done.returncode == 2

@@ -149,6 +149,7 @@ def lockstep(viewers: Callable[..., WebViewer]) -> Callable[[Simulation], Lockst
 
 
 # ------------------------------------------------------------------ the run's controls
+@pytest.mark.slow
 def test_pause_step_n_and_play(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
     """Pause holds the simulation; step(5) queues exactly 5 steps; a bad count is a note naming 1..100000 that
     changes nothing; play runs on."""
@@ -171,6 +172,7 @@ def test_pause_step_n_and_play(cleanup: Simulation, lockstep: Callable[[Simulati
     assert lock.tick() and lock.tick()
 
 
+@pytest.mark.slow
 def test_pace(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
     """A pace sets control.realtime_factor (2x: 2.0; as fast as possible: None); an unknown one is a note listing
     every valid pace and changes nothing."""
@@ -188,6 +190,7 @@ def test_pace(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -
 
 
 # ------------------------------------------------------------------ messages
+@pytest.mark.slow
 def test_message_reaches_the_agent(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
     """A message from the viewer reaches the agent before the next step, sent by "viewer"; one to a missing agent
     or with no text is a note, nothing is delivered, and the simulation steps on."""
@@ -214,6 +217,7 @@ def test_message_reaches_the_agent(cleanup: Simulation, lockstep: Callable[[Simu
 
 
 # ------------------------------------------------------------------ moving and resetting
+@pytest.mark.slow
 def test_move_entity(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
     """Dragging can_0 teleports it at once (pose read back before any step, in the snapshot and in viser's scene
     node of its frame); table_0 is static: a note says so and its pose is unchanged."""
@@ -238,6 +242,7 @@ def test_move_entity(cleanup: Simulation, lockstep: Callable[[Simulation], Locks
     assert np.array_equal(pos, table_pos) and np.array_equal(quat, table_quat)
 
 
+@pytest.mark.slow
 def test_reset_during_a_grasp(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
     """Reset while robot_000 holds can_0: the note names the released object; at the next pass of the loop the
     grasp is gone, the can is back where it started and the page no longer shows the old trial's events."""
@@ -408,6 +413,7 @@ def test_requests_from_the_panel(cleanup: Simulation, lockstep: Callable[[Simula
     assert cleanup.control.pending_steps == 3
 
 
+@pytest.mark.slow
 def test_a_crashed_viewer_process_leaves_the_run_going(cleanup: Simulation, viewers: Callable[..., WebViewer],
                                                         caplog: pytest.LogCaptureFixture) -> None:
     """The viewer's process killed in the middle of a run (SIGKILL: it cannot say goodbye): the run goes on to its

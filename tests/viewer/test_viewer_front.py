@@ -107,6 +107,7 @@ def test_every_change_to_viser_runs_on_its_event_loop_thread(
     assert loop_thread not in {threading.get_ident(), f._pusher.ident}
 
 
+@pytest.mark.slow
 def test_a_page_keeps_receiving_updates_when_the_lost_wake_up_race_is_widened(
         front: tuple[Front, list[tuple[Any, ...]]], scene: tuple[Any, np.ndarray, list[str]],
         monkeypatch: pytest.MonkeyPatch) -> None:

@@ -16,6 +16,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 CLEANUP = ROOT / "worlds" / "cleanup.xml"
 SIGCORE = [sys.executable, "-m", "sigcore"]
@@ -35,6 +37,7 @@ def short_run(*extra: str) -> list[str]:
             "--steps", "50", "--fast", "-q", *extra]
 
 
+@pytest.mark.slow
 def test_without_a_terminal_the_run_ends_at_once() -> None:
     """Without a terminal (output piped, as under eval or CI) and no --viewer-linger, nothing waits after the run."""
     t0 = time.monotonic()
@@ -45,6 +48,7 @@ def test_without_a_terminal_the_run_ends_at_once() -> None:
     assert time.monotonic() - t0 < 60, "the run took a minute: something waited after it"
 
 
+@pytest.mark.slow
 def test_linger_keeps_the_process_up_that_long_then_it_exits_with_the_verdict() -> None:
     """--viewer-linger 4 without a browser: the process exits 0 after the run plus 4 s (not before, and not long
     after: wide margins for a loaded machine)."""
@@ -71,6 +75,7 @@ def test_linger_keeps_the_process_up_that_long_then_it_exits_with_the_verdict() 
     assert 3.0 < waited < 30.0, f"the process waited {waited:.1f} s after the run; --viewer-linger 4"
 
 
+@pytest.mark.slow
 def test_a_failed_task_still_exits_1_after_lingering(tmp_path: Path) -> None:
     """The referee's time limit (3 s) ends the task as failed: after the wait the exit code is 1, as without a
     viewer."""
@@ -111,6 +116,7 @@ def _start_in_terminal(*extra: str) -> tuple[subprocess.Popen[bytes], int]:
     return proc, main
 
 
+@pytest.mark.slow
 def test_enter_in_the_terminal_ends_the_wait() -> None:
     """With a terminal the page stays without a time limit, until Enter: then the process exits 0 at once."""
     proc, terminal = _start_in_terminal()
@@ -131,6 +137,7 @@ def test_enter_in_the_terminal_ends_the_wait() -> None:
         os.close(terminal)
 
 
+@pytest.mark.slow
 def test_a_signal_ends_the_wait_with_the_verdict() -> None:
     """SIGTERM while the page lingers ends the process with the task's exit code (0), not as an abort."""
     proc, terminal = _start_in_terminal("--viewer-linger", "600")
@@ -146,6 +153,7 @@ def test_a_signal_ends_the_wait_with_the_verdict() -> None:
         os.close(terminal)
 
 
+@pytest.mark.slow
 def test_linger_0_never_waits_even_with_a_terminal() -> None:
     """--viewer-linger 0 with a terminal: the run ends as without a viewer, nothing is said about waiting."""
     proc, terminal = _start_in_terminal("--viewer-linger", "0")

@@ -111,6 +111,7 @@ def test_an_occupancy_grid_lies_on_the_floor(started: tuple[Simulation, WebViewe
     assert tuple(image[1, 1]) == (200, 200, 200)  # unknown
 
 
+@pytest.mark.slow
 def test_a_camera_image_is_shown(started: tuple[Simulation, WebViewer, Taken]) -> None:
     sim, viewer, pushed = started
     camera = sim.publications.declare(Publication("/robot_000/head/image", "sensor_msgs/msg/Image", "sensor",
@@ -137,6 +138,7 @@ def test_the_head_camera_of_the_clean_up_robot_is_shown(started: tuple[Simulatio
     assert images["/robot_000/head_rgbd/image_raw"].std() > 5  # the room, not a blank picture
 
 
+@pytest.mark.slow
 def test_robot_links_are_nested_under_the_robot_and_compose_to_their_pose(
         started: tuple[Simulation, WebViewer, Taken]) -> None:
     """A robot's link nodes hang under its root link's node, posed relative to it (one node moves when it drives);

@@ -20,7 +20,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from rosdomains import next_domain
 from sigcore_viewer.browser import Browser, missing
+
+pytestmark = [pytest.mark.ros2, pytest.mark.browser, pytest.mark.slow]
 
 ROOT = Path(__file__).resolve().parents[2]
 CLEANUP = ROOT / "worlds" / "cleanup.xml"
@@ -95,7 +98,8 @@ def test_the_readme_command_shows_the_task_being_solved_and_the_end_stays(tmp_pa
     score above 0 (the first grasp scores at about 12 s); at the end it shows "ended", the result and the score table
     and keeps them (5 s later still); closing the page then ends the process with the task's exit code 0."""
     port = free_port()
-    task = Command([sys.executable, str(RUN_TASK), "--viewer", "--viewer-port", str(port), "--viewer-linger", "900"],
+    task = Command([sys.executable, str(RUN_TASK), "--domain", str(next_domain()), "--viewer", "--viewer-port",
+                    str(port), "--viewer-linger", "900"],
                    tmp_path / "run_task.log")
     try:
         url = task.url(120)
@@ -170,7 +174,8 @@ def test_ctrl_c_in_the_terminal_ends_the_task_and_its_processes(tmp_path: Path) 
     two nodes run in sessions of their own) is passed on: the simulator ends its run and prints its results, run_task
     exits with the simulator's code and no traceback, and nothing is left behind (the viewer's port is free again)."""
     port = free_port()
-    task = Command([sys.executable, str(RUN_TASK), "--viewer", "--viewer-port", str(port), "--viewer-linger", "900"],
+    task = Command([sys.executable, str(RUN_TASK), "--domain", str(next_domain()), "--viewer", "--viewer-port",
+                    str(port), "--viewer-linger", "900"],
                    tmp_path / "run_task.log")
     try:
         task.url(120)

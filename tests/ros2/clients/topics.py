@@ -1,6 +1,7 @@
 """Publish each sig_ros topic and observe its effect through services (robot 'bot', objects ball/heavy)."""
 
 import math
+import time
 
 from common import Client, emit, todict
 from rosgraph_msgs.msg import Clock
@@ -96,14 +97,28 @@ c.publish(msg.EntityFlag, "/heavy_setCollisionEnable", name="", flag=False)
 settle(0.8)
 out["setCollisionEnable_off_z"] = pos("heavy")[2]
 # the robot's joints and wheels
-c.publish(msg.SetJointAngle, "/bot_setJointAngle", name="", joint_name="elbow_joint", angle=0.7)
-settle(0.1)
-out["setJointAngle"] = todict(c.call(srv.GetJointAngle, "/bot_get_joint_angle", name="", name_arm="elbow_joint"))
-c.publish(msg.SetJointQuaternion, "/bot_setJointQuaternion", name="", joint_name="elbow_joint",
-          qw=math.cos(0.2), qx=0.0, qy=math.sin(0.2), qz=0.0, offset=False)
-settle(0.1)
-out["setJointQuaternion"] = todict(c.call(srv.GetJointAngle, "/bot_get_joint_angle", name="",
-                                          name_arm="elbow_joint"))
+def elbow():
+    return todict(c.call(srv.GetJointAngle, "/bot_get_joint_angle", name="", name_arm="elbow_joint"))
+
+
+def set_until(msg_type, topic, check, timeout=10.0, **fields):
+    """Publish a command that sets a state (so sending it again changes nothing) every 0.1 s of simulated time
+    until ``check()``, at most ``timeout`` [s] of wall time: on a loaded machine the first message on a new topic can
+    be lost while the simulation's subscription still matches this publisher (seen once with 4 test workers)."""
+    end = time.monotonic() + timeout
+    c.publish(msg_type, topic, **fields)
+    settle(0.1)
+    while not check() and time.monotonic() < end:
+        c.publish(msg_type, topic, **fields)
+        settle(0.1)
+
+
+set_until(msg.SetJointAngle, "/bot_setJointAngle", lambda: abs(elbow()["angle"] - 0.7) < 0.05, name="",
+          joint_name="elbow_joint", angle=0.7)
+out["setJointAngle"] = elbow()
+set_until(msg.SetJointQuaternion, "/bot_setJointQuaternion", lambda: abs(elbow()["angle"] - 0.4) < 0.05, name="",
+          joint_name="elbow_joint", qw=math.cos(0.2), qx=0.0, qy=math.sin(0.2), qz=0.0, offset=False)
+out["setJointQuaternion"] = elbow()
 before = todict(c.call(srv.GetJointAngle, "/bot_get_joint_angle", name="", name_arm="shoulder_joint"))["angle"]
 c.publish(msg.SetJointVelocity, "/bot_setJointVelocity", joint_name="shoulder_joint", angular_velocity=1.0, max=0.0)
 settle(0.5)
