@@ -101,7 +101,11 @@ goal_future = action.send_goal_async(
 c.executor.spin_until_future_complete(goal_future, timeout_sec=10)
 result_future = goal_future.result().get_result_async()
 c.executor.spin_until_future_complete(result_future, timeout_sec=30)
-c.spin(0.5)  # feedback published just before the result may arrive after it
+# feedback published before the result may arrive after it (topic and service are not ordered): wait for all 20,
+# at most 10 s (seen: 3 of them more than 0.5 s late under the load of a parallel test run), then a little more, so
+# that a 21st would be seen
+c.wait_for(lambda: len(feedback) >= 20, 10.0)
+c.spin(0.3)
 out["action"] = result_future.result().result.result.result
 out["feedback"] = feedback
 
