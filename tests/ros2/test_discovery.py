@@ -21,9 +21,11 @@ pytestmark = pytest.mark.ros2
 CLIENT_COUNT = 20
 SPREAD = 2.0
 """The clients start at uniform random offsets in [0, SPREAD] s after ``sigcore run`` is started."""
-FOUND_WITHIN = 5.0
+FOUND_WITHIN = 10.0
 """Each client must see /sigcore/ready and have its call answered within this many seconds [s] of its own start (its
-DDS participant up), or of the simulator's ``ready:`` line if it started before the simulator was up."""
+DDS participant up), or of the simulator's ``ready:`` line if it started before the simulator was up. A wide margin:
+about 1-3 s alone, but 21 processes starting at once beside three other test workers on 2 cores took up to 6 s in a
+ci-fresh run (the bound was 5 s); a client that discovery missed would wait out CLIENT_LIMIT."""
 CLIENT_LIMIT = 30.0
 """A client gives up this long [s] after its own start (what the issue's client waited)."""
 
