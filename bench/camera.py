@@ -126,7 +126,7 @@ def overlap(world: Path, seconds: float, rounds: int) -> None:
         sim = Simulation(parse_world(world), "mujoco")
         frames: list[object] = []
         if camera:
-            sim.camera_observers.append(frames.append)
+            sim.events.subscribe("camera", frames.append)
         sim.step(100)
         sim.cameras.settle()
         frames.clear()

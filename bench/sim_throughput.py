@@ -44,7 +44,7 @@ def main() -> None:
     world = parse_world(args.world)
     sim = Simulation(world, "mujoco")
     events: list[CollisionEvent] = []
-    sim.collision_observers.append(events.append)  # contact events on, as with a transport attached
+    sim.events.subscribe("collision", events.append)  # contact events on, as with a transport attached
     model = sim.backend.model  # type: ignore[attr-defined]
     raw = mujoco.MjData(model)
     mujoco.mj_resetData(model, raw)

@@ -14,7 +14,7 @@ does: contact events (a collision listener is attached), lidar scans at their ra
 * sigcore (all on) against ``stepSimulation`` plus the same lidar done by hand (``rayTestBatch`` from the lidar
   link, same beams, same rate, no exclusion of the robot): the framework's overhead for the same work;
 * sigcore with its lidars removed against bare ``stepSimulation``: the framework's overhead per step;
-* the same without the world's feature plugins' step observers (referee, IK, ...): what the core and the backend
+* the same without the world's feature plugins' step subscribers (referee, IK, ...): what the core and the backend
   cost (arm servos with the world's gains, contact events, the held human).
 """
 
@@ -53,7 +53,7 @@ def main() -> None:
     world = parse_world(args.world)
     sim = Simulation(world, "bullet")
     events: list[CollisionEvent] = []
-    sim.collision_observers.append(events.append)  # contact events on, as with a transport attached
+    sim.events.subscribe("collision", events.append)  # contact events on, as with a transport attached
     raw_backend = BulletBackend()
     raw_backend.build(world)
     raw = raw_backend.client
@@ -80,7 +80,7 @@ def main() -> None:
     rates: dict[str, list[float]] = {"raw": [], "raw+lidar": [], "sigcore": [], "sigcore-nolidar": [],
                                      "sigcore-core": []}
     saved_lidars = sim.lidars
-    saved_observers = list(sim._step_observers)
+    step_subscriptions = sim.events.subscriptions("step")
     cpu: dict[str, list[float]] = {k: [] for k in rates}
 
     def timed(key: str, run: Callable[[], None]) -> None:
@@ -99,9 +99,10 @@ def main() -> None:
         timed("sigcore", lambda: sim.step(args.steps))
         sim.lidars = []
         timed("sigcore-nolidar", lambda: sim.step(args.steps))
-        sim._step_observers[:] = []
+        for subscription in step_subscriptions:
+            subscription.cancel()
         timed("sigcore-core", lambda: sim.step(args.steps))
-        sim._step_observers[:] = saved_observers
+        step_subscriptions = tuple(sim.events.subscribe("step", s.fn, s.owner) for s in step_subscriptions)
         sim.lidars = saved_lidars
 
     dt = world.timestep

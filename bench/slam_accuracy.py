@@ -95,7 +95,7 @@ def drive(sim: Simulation, slam: SlamFeature, loops: int, speed: float) -> tuple
         while len(truth) < len(slam.pose_history):
             truth.append(start_inv @ ground_truth(s))
 
-    sim.add_step_observer(record)
+    sim.events.subscribe("step", record)
     waypoints = ROUTE[:] * loops + [ROUTE[0]]
     steps_per_control = 10  # 50 Hz
     t0 = time.perf_counter()

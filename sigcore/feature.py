@@ -55,7 +55,8 @@ class Feature(ABC):
 
     @abstractmethod
     def __init__(self, sim: Simulation, config: BaseModel) -> None:
-        """Attach to ``sim`` (e.g. with ``sim.add_step_observer``).
+        """Attach to ``sim``: subscribe to its events (e.g. ``sim.events.subscribe("step", self._on_step)``; what
+        is subscribed here is this feature's, detached if it fails and when its world is unloaded).
 
         Args:
             sim: The simulation being built.

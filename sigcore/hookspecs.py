@@ -11,8 +11,9 @@ invalid, disables its whole plugin, which ``sigcore plugins`` then shows with th
 load.
 
 World-level event hooks are coarse; per-agent, per-step work is never a hook (a pluggy call costs about 2 µs,
-a physics step about 60 µs): a feature that needs every step calls ``sim.add_step_observer`` in its
-constructor.
+a physics step about 60 µs): a feature that needs every step subscribes to the simulation's ``step`` event
+(``sim.events.subscribe("step", fn)``, ``sigcore.sim.events``) in its constructor. These hooks are for plugins that
+are not features (they outlive worlds); a feature hears of its world through ``sim.events`` only.
 """
 
 from __future__ import annotations

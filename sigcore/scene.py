@@ -205,6 +205,7 @@ class Scene:
         world: The world.
         backend: The built backend (poses for :meth:`bounds`).
         frame: Names a robot's link frames (``Frames.name``).
+        on_change: Called with the scene after every :meth:`changed` (the simulation's ``scene`` event).
 
     Attributes:
         entities: Entity name -> its :class:`EntityScene`, in world order. Whoever spawns, deletes or changes an
@@ -212,8 +213,10 @@ class Scene:
         version: Bumped by every :meth:`changed`.
     """
 
-    def __init__(self, world: World, backend: Backend, frame: FrameName) -> None:
+    def __init__(self, world: World, backend: Backend, frame: FrameName,
+                 on_change: Callable[[Scene], None] | None = None) -> None:
         self._backend = backend
+        self._on_change = on_change
         self.entities: dict[str, EntityScene] = {e.name: entity_scene(world, e, frame) for e in world.entities}
         self.version = 0
         self._parts: dict[str, dict[str, str | None]] = {}
@@ -223,7 +226,6 @@ class Scene:
                 urdf = world.urdf(e.name).model
                 self._parts[e.name] = {frame(e.name, link): (None if link == urdf.root else link)
                                        for link in urdf.links}
-        self._observers: list[Callable[[Scene], None]] = []
         self._unmeasured: set[Path] = set()
 
     def add(self, world: World, entities: Iterable[Entity], frame: FrameName) -> None:
@@ -247,16 +249,12 @@ class Scene:
         frame's pose in ``world``."""
         return dict(self._parts.get(name, {name: None}))
 
-    def add_observer(self, observer: Callable[[Scene], None]) -> None:
-        """Call ``observer(scene)`` after every :meth:`changed` (e.g. to republish ``/sigcore/scene``)."""
-        self._observers.append(observer)
-
     def changed(self) -> None:
-        """Something was spawned, deleted or changed in :attr:`entities`: bump :attr:`version`, tell the
-        observers."""
+        """Something was spawned, deleted or changed in :attr:`entities`: bump :attr:`version`, then tell
+        ``on_change`` (the simulation emits its ``scene`` event)."""
         self.version += 1
-        for observer in list(self._observers):
-            observer(self)
+        if self._on_change is not None:
+            self._on_change(self)
 
     def bounds(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """The axis-aligned box around entity ``name``'s visuals in ``world`` at the current poses [m].

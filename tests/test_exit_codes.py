@@ -56,7 +56,7 @@ class Faulty(Transport):
         def observer(s):
             if s.step_count == 100:
                 raise RuntimeError("transport bug")
-        sim.add_step_observer(observer)
+        sim.events.subscribe("step", observer)
 
     def stop(self):
         pass

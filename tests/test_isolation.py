@@ -87,8 +87,8 @@ class Flaky(Feature):
             raise RuntimeError("no [/dev/flaky] device")
         if self.fail == "init-exit":
             sys.exit(5)
-        sim.add_step_observer(self._on_step)
-        sim.message_observers.append(self._on_message)
+        sim.events.subscribe("step", self._on_step)
+        sim.events.subscribe("message", self._on_message)
         sim.register_service("flaky_service", self._on_service)
 
     def _on_step(self, sim):
@@ -148,7 +148,7 @@ class Faulty(Transport):
     name = "faulty"
 
     def start(self, sim):
-        sim.add_step_observer(self._on_step)
+        sim.events.subscribe("step", self._on_step)
 
     def _on_step(self, sim):
         if sim.step_count == 100:
@@ -415,7 +415,7 @@ def test_an_observer_no_feature_owns_ends_the_run_with_the_error(sim: Simulation
         if s.step_count == 10:
             raise RuntimeError("a bug")
 
-    sim.add_step_observer(broken)
+    sim.events.subscribe("step", broken)
     report = run(sim, steps=100, handle_signals=False)
     assert (report.steps, report.stopped_by, report.error) == (10, "error", "RuntimeError: a bug")
     assert report.feature_failures == []

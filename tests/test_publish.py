@@ -116,10 +116,10 @@ def test_event_sources_are_attached_only_when_a_sink_connects() -> None:
     """Without a sink nothing listens to collisions (the step skips contact events); with one, each message and
     each scan arrives as a field dictionary stamped with its step."""
     sim = Simulation(parse_world(SIM_WORLD), "mujoco")
-    assert not sim.collision_observers and not sim.scan_observers
+    assert not sim.events.subscriptions("collision") and not sim.events.subscriptions("scan")
     sink = Recorder()
     sim.publications.connect(sink)
-    assert sim.collision_observers and sim.scan_observers
+    assert sim.events.subscriptions("collision") and sim.events.subscriptions("scan")
     sim.send_msg("someone", "bot", "hello")
     sim.step(200)
     scans = [(stamp, v) for topic, stamp, v in sink.values if topic == "bot_scan"]

@@ -81,7 +81,7 @@ def test_messages_reach_on_recv_msg(sim: Simulation) -> None:
     sim.set_controller("ball", other)
     sim.set_controller("bot", trackers.Greeter())
     seen = []
-    sim.message_observers.append(seen.append)
+    sim.events.subscribe("message", seen.append)
     sim.step(1)
     assert [(m.sender, m.content) for m in receiver.messages] == [("bot", "hello moderator"), ("bot", "hello all")]
     assert [m.content for m in other.messages] == ["hello all"]
@@ -173,7 +173,7 @@ def test_realtime_factor_paces_the_run(sim: Simulation) -> None:
 def test_lidar_scans_at_its_rate(sim: Simulation) -> None:
     """The lidar produces one scan per 1/rate simulated seconds, stamped with the sim time, in metres."""
     scans = []
-    sim.scan_observers.append(scans.append)
+    sim.events.subscribe("scan", scans.append)
     sim.step(round(0.5 / sim.dt))
     assert [round(s.stamp, 6) for s in scans] == [0.1, 0.2, 0.3, 0.4, 0.5]
     s = scans[-1]

@@ -52,7 +52,7 @@ def test_spawned_box_falls_rests_and_is_everywhere(sim: Simulation) -> None:
     """A box spawned in the air while running falls to rest on the floor and is in every core view."""
     sim.step(10)
     changes: list[EntityChange] = []
-    sim.entity_observers.append(changes.append)
+    sim.events.subscribe("entities", changes.append)
     name = _one(sim, name="box_a", resource=BOX, xyz=(1.0, 1.0, 0.5))
     assert name == "box_a" and changes == [EntityChange(added=("box_a",))]
     assert "box_a" in sim.agents and "box_a" in sim.entity_names and sim.spawned == {"box_a": ""}
@@ -107,7 +107,7 @@ def test_delete_releases_grasp_and_forgets_everything(sim: Simulation) -> None:
     robot.grasp("l_hand_link", "cube")
     assert sim.grasps.held_by("cube") is not None
     changes: list[EntityChange] = []
-    sim.entity_observers.append(changes.append)
+    sim.events.subscribe("entities", changes.append)
     sim.delete(["cube"])
     assert changes == [EntityChange(removed=("cube",))]
     assert sim.grasps.items() == []

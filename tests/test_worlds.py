@@ -208,9 +208,9 @@ def test_observers_and_publications_follow_the_world(cleanup: World, arm6: World
     sink = Recorder()
     sim.publications.connect(sink)
     seen: list[tuple[str, str, int]] = []
-    sim.world_observers.append(lambda c: seen.append((c.kind, c.world.name, len(sim.entity_names))))
+    sim.events.subscribe("world", lambda c: seen.append((c.kind, c.world.name, len(sim.entity_names))))
     steps: list[int] = []
-    sim.add_step_observer(lambda s: steps.append(s.step_count))
+    sim.events.subscribe("step", lambda s: steps.append(s.step_count))
     old_topics = {p.topic for p in sim.publications.declared}
     sim.step(3)
     sink.events.clear()
@@ -223,7 +223,8 @@ def test_observers_and_publications_follow_the_world(cleanup: World, arm6: World
     fresh.publications.connect(Recorder())
     assert declared == {p.topic for p in fresh.publications.declared} == {p.topic for p in sim.publications.declared}
     assert "/referee/score" in old_topics and "/referee/score" not in declared
-    assert len(sim._step_observers) == len(fresh._step_observers) + 1  # the features' + ours
+    steps_now = sim.events.subscriptions("step")
+    assert len(steps_now) == len(fresh.events.subscriptions("step")) + 1  # the features' + ours
     sim.control.paused = False
     sim.step(2)
     assert steps == [1, 2, 3, 1, 2]
@@ -297,7 +298,7 @@ def test_run_counts_steps_across_a_world_load(cleanup: World) -> None:
     small = open_world("", SMALL, [])
     sim = Simulation(cleanup, "mujoco")
     changes: list[WorldChange] = []
-    sim.world_observers.append(changes.append)
+    sim.events.subscribe("world", changes.append)
     report = run(sim, steps=100, transport=WorldSwitcher(small, 40), handle_signals=False)
     assert [c.kind for c in changes] == ["unloading", "loaded"]
     assert report.steps == 100 and sim.world.name == "small" and sim.step_count == 60

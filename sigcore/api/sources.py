@@ -38,7 +38,7 @@ class ReceivedMessages(Source):
             if pub is not None:
                 pub.publish({"sender": message.sender, "content": message.content})
 
-        sim.message_observers.append(on_message)
+        sim.events.subscribe("message", on_message)
 
 
 class Collisions(Source):
@@ -50,7 +50,7 @@ class Collisions(Source):
             if pub is not None:
                 pub.publish({"name": event.other, "part": event.part})
 
-        sim.collision_observers.append(on_collision)
+        sim.events.subscribe("collision", on_collision)
 
 
 class Scans(Source):
@@ -68,4 +68,4 @@ class Scans(Source):
                 stamp = round(scan.stamp / sim.dt) * dt_ns
                 pub.publish(scan.fields(sim.frames.name(scan.robot, scan.frame), stamp), stamp)
 
-        sim.scan_observers.append(on_scan)
+        sim.events.subscribe("scan", on_scan)

@@ -116,8 +116,8 @@ class Recorder(PublicationSink):
         self._scene: Any = None
         self.closed = False
         self._attach_world()
-        sim.add_step_observer(self._on_step)
-        sim.inputs.listeners.append(self._on_input)
+        self._subscriptions = (sim.events.subscribe("step", self._on_step),
+                               sim.events.subscribe("input", self._on_input))
         sim.publications.connect(self)
         self._write_truth()
 
@@ -247,9 +247,8 @@ class Recorder(PublicationSink):
             self._write_truth(closing=True)
         finally:
             self.sim.publications.disconnect(self)
-            self.sim.remove_step_observer(self._on_step)
-            if self._on_input in self.sim.inputs.listeners:
-                self.sim.inputs.listeners.remove(self._on_input)
+            for subscription in self._subscriptions:
+                subscription.cancel()
             self.bag.close({"sigcore_version": __version__, "world": self.sim.world.name})
 
     @property

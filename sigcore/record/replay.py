@@ -36,6 +36,7 @@ from .verify import COMPARED_TOPICS
 if TYPE_CHECKING:
     from ..api.deferred import Deferred
     from ..api.table import ApiEntry
+    from ..sim.events import Subscription
     from ..sim.simulation import Simulation
     from ..world import World
 
@@ -242,6 +243,7 @@ class Replayer(Transport):
         self._inputs = list(takewhile(lambda i: until is None or i.step < until, inputs))
         self._end = end
         self._next = 0
+        self._subscription: Subscription | None = None
         self._held: list[tuple[ApiEntry, str, Deferred]] = []
         self._sim: Simulation | None = None
         self.applied = 0
@@ -254,7 +256,7 @@ class Replayer(Transport):
 
     def start(self, sim: Simulation) -> None:
         self._sim = sim
-        sim.add_step_observer(self._poll_held)
+        self._subscription = sim.events.subscribe("step", self._poll_held)
 
     def service(self, timeout: float) -> None:
         sim = self._sim
@@ -281,7 +283,8 @@ class Replayer(Transport):
         sim = self._sim
         if sim is None:
             return
-        sim.remove_step_observer(self._poll_held)
+        if self._subscription is not None:
+            self._subscription.cancel()
         if self._end is not None and sim.step_count == self._end and self.error is None:
             before = self.applied
             self.service(0.0)  # the commands the run applied after its last step, as its transport stopped

@@ -25,6 +25,7 @@ from .recorder import GROUND_TRUTH_PREFIX, truth_frames
 from .serialize import SerializeError, Serializer
 
 if TYPE_CHECKING:
+    from ..sim.events import Subscription
     from ..sim.simulation import Simulation
 
 __all__ = ["COMPARED_TOPICS", "Divergence", "ReplayCheck", "TopicCheck", "TopicVerdict", "TruthCheck",
@@ -114,6 +115,7 @@ class TruthCheck:
         self.tolerance = tolerance
         self.dt = dt
         self.compared = 0
+        self._subscription: Subscription | None = None
         """Messages compared so far."""
         self.bitwise = 0
         """Of those, messages equal to the bit."""
@@ -140,11 +142,12 @@ class TruthCheck:
         """Compare the frames of the start (before the first step and its commands) and observe every step."""
         self._compare_due(sim)
         if self.divergence is None:
-            sim.add_step_observer(self._on_step)
+            self._subscription = sim.events.subscribe("step", self._on_step)
 
     def finish(self, sim: Simulation) -> None:
         """The replay has ended: compare the last frame of a whole run (after the commands of the last step)."""
-        sim.remove_step_observer(self._on_step)
+        if self._subscription is not None:
+            self._subscription.cancel()
         if self.divergence is None and self.whole_run and self._next == len(self.frames) - 1 \
                 and self.frames[-1][0] == sim.step_count:
             self._compare(sim, self._next)

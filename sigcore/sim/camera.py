@@ -267,7 +267,7 @@ class Cameras:
     def capture(self, step: int) -> None:
         """Take the views of the cameras due at ``step`` (the simulation calls this after each step), and publish
         the frames that finished rendering. A camera is rendered only while something takes its images (a
-        ``sim.camera_observers`` entry, or a sink that wants one of its topics: a ROS 2 subscriber)."""
+        ``camera`` subscriber on ``sim.events``, or a sink that wants one of its topics: a ROS 2 subscriber)."""
         due = [s for s in self.sensors if step % s.period_steps == 0 and self._wanted(s)]
         due += [s for s, _ in self._watched.values() if step % s.period_steps == 0]
         if due and self._failed is None:
@@ -276,9 +276,9 @@ class Cameras:
             self.poll()
 
     def _wanted(self, sensor: CameraSensor) -> bool:
-        """Whether anyone takes this camera's images now: a camera observer, or a sink that wants one of its topics
-        (ROS 2: a subscriber)."""
-        if self._sim.camera_observers:
+        """Whether anyone takes this camera's images now: a ``camera`` subscriber, or a sink that wants one of its
+        topics (ROS 2: a subscriber)."""
+        if self._sim.events.wanted("camera"):
             return True
         return any(p.wanted for _, p in self._publishers.get((sensor.robot, sensor.name), ()))
 
@@ -413,11 +413,10 @@ class Cameras:
                     publisher.publish(image_fields(header, frame.depth, "32FC1"), frame.stamp_ns)
                 else:
                     publisher.publish(image_fields(header, frame.rgb, "rgb8"), frame.stamp_ns)
-            for observer in self._sim.camera_observers:
-                try:
-                    observer(frame)
-                except USER_ERRORS:
-                    log.exception("a camera observer raised (the simulation goes on)")
+            try:  # a feature's subscriber that raises disables the feature (the hub); another one's is logged
+                self._sim.events.emit("camera", frame)
+            except USER_ERRORS:
+                log.exception("a camera subscriber raised (the simulation goes on)")
 
 
 def image_fields(header: dict[str, Any], image: Image | None, encoding: str) -> dict[str, Any]:

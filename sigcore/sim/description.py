@@ -149,7 +149,7 @@ class DescriptionTopics:
         for topic, robot in description_topics(sim.world).items():
             self._declare(robot, topic)
         self._scene: Publisher = sim.publications.declare(SCENE)
-        sim.scene.add_observer(self.publish_scene)
+        sim.events.subscribe("scene", self.publish_scene)
         self.publish_scene(sim.scene)
 
     def _declare(self, robot: str, topic: str) -> None:

@@ -3,7 +3,8 @@ at which it took effect, so that a run can be re-simulated exactly (``sigcore re
 
 The simulation is deterministic and applies commands only between steps: a transport runs what its clients send
 when it is serviced, a viewer what a person does. Whoever applies such a command tells :class:`Inputs` (``sim.inputs``,
-the one owner of the log) with :meth:`Inputs.note`; a recorder listens (:attr:`Inputs.listeners`) and keeps them.
+the one owner of the log) with :meth:`Inputs.note`; a recorder subscribes to the ``input`` channel of
+``sim.events`` and keeps them.
 A command noted at step ``k`` (``sim.step_count``) took effect after step ``k``'s physics and before step ``k + 1``'s:
 a replay applies it there (:meth:`Inputs.apply`), before stepping on.
 
@@ -35,7 +36,7 @@ same way (:func:`refusal`).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
@@ -110,31 +111,28 @@ def spawn_request_of(args: dict[str, Any]) -> SpawnRequest:
 
 
 class Inputs:
-    """The input log of one simulation (``sim.inputs``): tells :attr:`listeners` of every command noted."""
+    """The input log of one simulation (``sim.inputs``): emits every command noted on the ``input`` channel of
+    ``sim.events`` (a recorder subscribes); nothing is kept otherwise."""
 
     def __init__(self, sim: Simulation) -> None:
         self._sim = sim
-        self.listeners: list[Callable[[Input], None]] = []
-        """Called with each :class:`Input` as it is noted (a recorder); nothing is kept otherwise."""
 
     @property
     def wanted(self) -> bool:
         """Whether anyone listens (a caller may skip building the arguments otherwise)."""
-        return bool(self.listeners)
+        return self._sim.events.wanted("input")
 
     def note(self, kind: str, **args: Any) -> None:
         """A command of ``kind`` with ``args`` takes effect now (between step ``sim.step_count`` and the next)."""
-        if not self.listeners:
-            return
-        item = Input(self._sim.step_count, kind, args)
-        for listener in list(self.listeners):
-            listener(item)
+        events = self._sim.events
+        if events.wanted("input"):
+            events.emit("input", Input(self._sim.step_count, kind, args))
 
     def note_spawn(self, requests: Sequence[SpawnRequest], outcomes: Sequence[str | SpawnRefusal],
                    what: str = "") -> None:
         """``requests`` were just passed to :meth:`Simulation.spawn` (one call) and gave ``outcomes`` (a name, or
         the refusal): one ``spawn`` input."""
-        if self.listeners:
+        if self.wanted:
             self.note("spawn", requests=[spawn_request_args(r) for r in requests],
                       names=[o if isinstance(o, str) else None for o in outcomes], what=what)
 

@@ -30,19 +30,20 @@ from ..text import quote
 from ..world.exceptions import WorldError, WorldIssue
 from ..world.models import Entity, Object, Robot, World
 from ..world.urdf import UrdfModel
-from .camera import CameraFrame, Cameras
+from .camera import Cameras
 from .contacts import ContactTracker, rolling_parts
 from .control import RunControl
 from .description import DescriptionTopics
 from .dispatch import Dispatcher
 from .drive import DriveState
+from .events import Events, Reset, Subscriber, Subscription
 from .exceptions import FeatureError
-from .feature_guard import OBSERVER_LISTS, FeatureFailure, FeatureGuard
+from .feature_guard import FeatureFailure, FeatureGuard, FeatureOwner
 from .frames import Frames
 from .grasps import Grasps
 from .info import EntityInfos
 from .inputs import Inputs
-from .lidar import LidarSensor, Scan
+from .lidar import LidarSensor
 from .modes import Mode, Modes
 from .odometry import WheelOdometry
 from .owners import Owners
@@ -65,7 +66,14 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("sigcore")
 
-StepObserver = Callable[["Simulation"], None]
+
+
+class _WorldParts:
+    """The owner of what one world's own parts subscribed (its description topics, its publication sources):
+    detached with that world."""
+
+    def __repr__(self) -> str:
+        return "<the world's parts>"
 
 
 class Simulation:
@@ -84,30 +92,22 @@ class Simulation:
 
     def __init__(self, world: World, backend: str | Backend = "mujoco",
                  controllers: dict[str, str] | None = None) -> None:
-        # what lasts from one world to the next (load_world): the run's control, the observers transports and
-        # library users attach, the publication contract and its sinks, the clock of the whole process
+        # what lasts from one world to the next (load_world): the run's control, the event hub (what transports and
+        # library users subscribed), the publication contract and its sinks, the clock of the whole process
         self._backend_class: type[Backend] = (plugins.get_backend(backend) if isinstance(backend, str)
                                               else type(backend))
         self.control = RunControl()
-        self.collision_observers: list[Callable[[CollisionEvent], None]] = []
-        self.message_observers: list[Callable[[Message], None]] = []
-        self.scan_observers: list[Callable[[Scan], None]] = []
-        self.camera_observers: list[Callable[[CameraFrame], None]] = []
-        """Called on the simulation thread with every camera image when it is published (``sim.cameras``)."""
-        self._step_observers: list[StepObserver] = []
-        self.entity_observers: list[Callable[[EntityChange], None]] = []
-        """Called after every spawn and delete, once the core's state is consistent (transports, viewers)."""
-        self.world_observers: list[Callable[[WorldChange], None]] = []
-        """Called before a world is unloaded and after one is loaded (:meth:`load_world`, :meth:`unload_world`)."""
-        self.reset_observers: list[Callable[[], None]] = []
-        """Called by :meth:`reset` once the core's state is restored, before the features reset (viewers)."""
+        self.events = Events(self._contain, self._owner_of)
+        """The event hub (``sigcore.sim.events``): step, collision, message, scan, camera, entities, scene, world and
+        reset; ``sim.events.subscribe(channel, fn)``."""
+        self._world_parts = _WorldParts()
+        self._hooks: dict[Subscription, str] = {}  # the features' reset/entities_changed subscriptions -> hook name
         self.world_sources: list[Path] = []
         """World files and folders :meth:`available_worlds` lists besides ``worlds/`` (``sigcore run --worlds``)."""
         self.loaded = True
         """False after :meth:`unload_world` until a world is loaded: nothing steps, entities are none."""
         self._steps_before = 0  # steps and simulated time of the worlds unloaded so far (elapsed_steps/_time)
         self._time_before = 0.0
-        self._source_observers: dict[int, object] = {}  # observers the agents' publication sources attached
         self._sources_attached = False
         self.inputs = Inputs(self)
         """The input log: commands applied from outside (transports, viewers), for recordings and replays."""
@@ -166,10 +166,12 @@ class Simulation:
         for robot in world.agents:
             if isinstance(robot, Robot) and robot.cameras:
                 self.cameras.add(robot.name, robot.cameras)
-        self.scene = Scene(world, self.backend, self.frames.name)
+        self.scene = Scene(world, self.backend, self.frames.name, lambda scene: self.events.emit("scene", scene))
         """Every entity's visual geometry and bounds (``sigcore.scene``); ``robot_description`` and
         ``/sigcore/scene`` are published from it."""
-        self.description = DescriptionTopics(self)
+        self._world_parts = _WorldParts()
+        with self.events.owned_by(self._world_parts):
+            self.description = DescriptionTopics(self)
         self.spawned: dict[str, str] = {}
         """Entities added while running -> their namespace (``""`` or ``/ns``); ``sigcore.sim.spawn``."""
         self._initial_world = world
@@ -177,8 +179,9 @@ class Simulation:
         self._attach_controllers(controllers)
         self.features: dict[str, Feature] = {}
         self.feature_guard = FeatureGuard()
-        """Which feature attached which observer and service; the features disabled while running."""
+        """Which feature registered which viewer service; the features disabled while running."""
         self._feature_entries: dict[str, list[ApiEntry]] = {}
+        self._creating: str | None = None  # the feature being created (its services are its own)
         self._create_features()
         self._declare_agent_publications()
         if notify:
@@ -242,26 +245,42 @@ class Simulation:
                 continue
             except USER_ERRORS as e:  # its config model's own validator failed: the feature's code, not the file
                 raise FeatureError(cfg.name, f"{self.world.source}:{cfg.line}", e) from e
-            before = self._attached()
+            owner = FeatureOwner(cfg.name)
+            self._creating = cfg.name
             try:
-                self.features[cfg.name] = cls(self, config)
+                with self.events.owned_by(owner):
+                    feature = self.features[cfg.name] = cls(self, config)
                 self._feature_entries[cfg.name] = list(cls.api_entries())
+                self._subscribe_hooks(owner, feature)
             except FieldError as e:
                 issues.append(plugin_issue(self.world, cfg, e.field, str(e)))
             except (ValueError, KeyError, TypeError) as e:
                 issues.append(plugin_issue(self.world, cfg, None, f"plugin '{cfg.name}': {e}"))
             except USER_ERRORS as e:  # not its attributes: the feature itself failed (or called sys.exit)
                 raise FeatureError(cfg.name, f"{self.world.source}:{cfg.line}", e) from e
-            observers, services = self._attached()
-            self.feature_guard.adopt(cfg.name, [o for i, o in observers.items() if i not in before[0]],
-                                     services - before[1])
+            finally:
+                self._creating = None
+            if cfg.name not in self.features:
+                self.events.detach(owner)  # what a constructor that failed had subscribed
         if issues:
             raise WorldError(issues)
 
-    def _attached(self) -> tuple[dict[int, object], set[str]]:
-        """The observers (by id) and viewer services attached so far (to tell which a feature's constructor
-        added)."""
-        return {id(o): o for attr in OBSERVER_LISTS for o in getattr(self, attr)}, set(self.services)
+    def _subscribe_hooks(self, owner: FeatureOwner, feature: Feature) -> None:
+        """``feature.entities_changed`` and ``feature.reset`` on the hub's ``entities`` and ``reset`` channels, owned
+        by the feature (only those it overrides: the defaults do nothing)."""
+        cls = type(feature)
+        if cls.entities_changed is not Feature.entities_changed:
+            self._hooks[self.events.subscribe("entities", feature.entities_changed, owner)] = "entities_changed"
+        if cls.reset is not Feature.reset:
+            def reset(_: Reset, hook: Callable[[], None] = feature.reset) -> None:
+                hook()
+            self._hooks[self.events.subscribe("reset", reset, owner)] = "reset"
+
+    def _owner_of(self, fn: Subscriber) -> FeatureOwner | None:
+        """The owner of a subscriber subscribed without one: the feature it is a bound method of, if any."""
+        instance = getattr(fn, "__self__", None)
+        return next((FeatureOwner(name) for name, feature in getattr(self, "features", {}).items()
+                     if feature is instance), None)
 
     def _declare_agent_publications(self, agents: Iterable[str] | None = None) -> None:
         """One publication per agent (of ``agents``, default all) for every ``publish`` entry of the API table (the
@@ -289,19 +308,16 @@ class Simulation:
                     self._attach_source(*slot)
 
     def _attach_sources(self) -> None:
-        """Attach the sources of the agents' publications (when the first sink connects); the observers that a
-        feature's source attaches are that feature's."""
+        """Attach the sources of the agents' publications (when the first sink connects); what a feature's
+        source subscribes is that feature's."""
         self._sources_attached = True
         for source, publishers, feature in self._sources:
             self._attach_source(source, publishers, feature)
 
     def _attach_source(self, source: Source, publishers: dict[str, Publisher], feature: str | None) -> None:
-        before = self._attached()[0]
-        source.attach(self, publishers)
-        added = [o for i, o in self._attached()[0].items() if i not in before]
-        if feature is not None:
-            self.feature_guard.adopt(feature, added, ())
-        self._source_observers.update((id(o), o) for o in added)
+        """What ``source`` subscribes is its feature's (detached if that feature is disabled), or the world's."""
+        with self.events.owned_by(self._world_parts if feature is None else FeatureOwner(feature)):
+            source.attach(self, publishers)
 
     # ------------------------------------------------------------------ run-time changes (sigcore.sim.spawn)
     def namespace(self, agent: str) -> str:
@@ -374,7 +390,7 @@ class Simulation:
     def add_entities(self, models: Sequence[Entity], namespaces: dict[str, str] | None = None) -> list[str]:
         """Add validated entity models while running (between steps), in one backend call: every owner of
         per-entity state learns of them, their controllers are created (``on_init`` called at once when the run
-        has started), features and :attr:`entity_observers` are told.
+        has started), the ``entities`` channel is emitted (features, transports).
 
         Raises:
             SpawnRefusal: a name is taken or names a TF frame in use (NAME_NOT_UNIQUE), a controller cannot be
@@ -501,16 +517,10 @@ class Simulation:
                                   {name: rolling_parts(r, self._urdfs[name]) for name, r in robots.items()})
 
     def _changed(self, change: EntityChange) -> None:
-        """Tell the scene's observers, the features and the entity observers (in that order)."""
+        """Emit ``scene`` (the scene's version bumped), then ``entities`` (features' ``entities_changed``,
+        transports)."""
         self.scene.changed()
-        for name, feature in list(self.features.items()):
-            if name not in self.feature_guard.disabled:
-                try:
-                    feature.entities_changed(change)
-                except USER_ERRORS as e:
-                    self.disable_feature(name, "entities_changed", e)
-        for observer in list(self.entity_observers):
-            observer(change)
+        self.events.emit("entities", change)
 
     # ------------------------------------------------------------------ worlds (sigcore.world.catalogue)
     def available_worlds(self, sources: Sequence[str | Path] = ()) -> tuple[list[WorldResource], list[str]]:
@@ -531,7 +541,8 @@ class Simulation:
         the old world is unloaded (:meth:`unload_world`), then everything of the new one is built as a new
         :class:`Simulation` would: backend, agents and their controllers (the world file's), features, publications.
         The new world is paused at time 0 (``step_count`` starts again; :attr:`elapsed_steps` goes on), as
-        simulation_interfaces' LoadWorld leaves it "stopped"; :attr:`world_observers` are told.
+        simulation_interfaces' LoadWorld leaves it "stopped"; the ``world`` channel is emitted (``unloading``, then
+        ``loaded``).
 
         Raises:
             WorldRefusal: RESOURCE_PARSE_ERROR when a controller or ``<plugin>`` of ``world`` cannot be created
@@ -554,8 +565,7 @@ class Simulation:
         self.loaded = True
         self._world_ready()
         log.info("loaded world '%s' (%s): %d entities", world.name, world.source, len(self.entity_names))
-        for observer in list(self.world_observers):
-            observer(WorldChange("loaded", world))
+        self.events.emit("world", WorldChange("loaded", world))
 
     def unload_world(self) -> None:
         """Remove the running world (between steps): every entity, controller, feature and publication of it goes
@@ -603,25 +613,20 @@ class Simulation:
             raise WorldRefusal("RESOURCE_PARSE_ERROR", "; ".join(str(i) for i in issues[:4]))
 
     def _teardown(self, notify: bool = True) -> None:
-        """Drop everything of the current world; what lasts across worlds (control, observers of transports and
-        library users, the publication sinks) stays."""
+        """Drop everything of the current world; what lasts across worlds (control, what transports and library
+        users subscribed, the publication sinks) stays."""
         if notify:
-            for observer in list(self.world_observers):
-                observer(WorldChange("unloading", self.world))
+            self.events.emit("world", WorldChange("unloading", self.world))
             for line in self.report_lines():
                 log.info("world '%s' at its end: %s", self.world.name, line)
         self._steps_before += self.step_count
         self._time_before += self.time
         for publication in self.publications.declared:
             self.publications.withdraw(publication.topic)
-        guard = getattr(self, "feature_guard", None)
-        for attr in OBSERVER_LISTS:
-            observers = getattr(self, attr)
-            if guard is not None:
-                for feature in getattr(self, "features", {}):
-                    observers = guard.detach(feature, observers, self.features)
-            setattr(self, attr, [o for o in observers if id(o) not in self._source_observers])
-        self._source_observers.clear()
+        for feature in getattr(self, "features", {}):
+            self.events.detach(FeatureOwner(feature))
+        self.events.detach(self._world_parts)
+        self._hooks.clear()
         self.cameras.close()
         self.backend.close()
 
@@ -715,6 +720,8 @@ class Simulation:
         """Offer a viewer service (e.g. a referee): ``handler(sender, text)`` receives ``_send_msg_to_srv`` texts
         and raises ``ApiError`` to refuse one."""
         self.services[name] = handler
+        if self._creating is not None:
+            self.feature_guard.services[name] = self._creating
 
     # ------------------------------------------------------------------ wrenches (for the next step)
     def add_wrench(self, entity: str, part: str | None, force: Array, torque: Array) -> None:
@@ -748,17 +755,12 @@ class Simulation:
                 self.send_msg(sender, name, text)
 
     def deliver_messages(self) -> None:
-        """Deliver queued messages to controllers and observers (done before every step)."""
+        """Deliver queued messages to controllers and the ``message`` channel (done before every step)."""
         while self._outbox:
             outbox, self._outbox = self._outbox, []
             for msg in outbox:
                 self.dispatch.message(msg)
-                for observer in self.message_observers:
-                    try:
-                        observer(msg)
-                    except USER_ERRORS as e:
-                        if not self._contain(observer, e, "message observer"):
-                            raise
+                self.events.emit("message", msg)
 
     # ------------------------------------------------------------------ contacts
     def contact_triples(self) -> frozenset[tuple[str, str, str]]:
@@ -772,53 +774,36 @@ class Simulation:
 
     def _collisions(self) -> None:
         """Deliver the contact episodes that start at this step (``sigcore.sim.contacts``) to controllers and
-        observers."""
+        the ``collision`` channel."""
         for entity, part, other in self._contacts.events(self.step_count):
             event = CollisionEvent(entity, part, other, self.time)
             self.dispatch.collision(event)
-            for observer in self.collision_observers:
-                try:
-                    observer(event)
-                except USER_ERRORS as e:
-                    if not self._contain(observer, e, "collision observer"):
-                        raise
+            self.events.emit("collision", event)
 
     # ------------------------------------------------------------------ stepping
-    def add_step_observer(self, observer: StepObserver) -> None:
-        """Call ``observer(sim)`` after every step (features and transports; keep it cheap).
-
-        An observer that a feature attached (in its constructor, or a method of the feature) and that raises
-        disables that feature (see :meth:`disable_feature`); any other observer's exception (the core's, a
-        transport's, a library user's) propagates: :func:`sigcore.sim.run` then ends the run with the error in its
-        report."""
-        self._step_observers.append(observer)
-
-    def remove_step_observer(self, observer: StepObserver) -> None:
-        """Stop calling ``observer`` after each step (no error if it is not attached)."""
-        if observer in self._step_observers:
-            self._step_observers.remove(observer)
-
-    def _contain(self, observer: object, exc: BaseException, where: str) -> bool:
-        """``observer`` raised ``exc``: disable the feature that owns it and return True, or False if no feature
-        does (the caller re-raises)."""
-        feature = self.feature_guard.owner(observer, self.features)
-        if feature is None:
+    def _contain(self, subscription: Subscription, exc: BaseException) -> bool:
+        """A subscriber raised ``exc`` (``sigcore.sim.events``): disable the feature that owns it and return True, or
+        False if no feature does (the hub re-raises: the core's, a transport's or a library user's error ends the
+        run, with the error in its report)."""
+        owner = subscription.owner
+        if not isinstance(owner, FeatureOwner) or owner.name not in self.features:
             return False
-        self.disable_feature(feature, where, exc)
+        where = self._hooks.get(subscription) or f"{subscription.channel} observer"
+        self.disable_feature(owner.name, where, exc)
         return True
 
     def disable_feature(self, feature: str, where: str, exc: BaseException) -> FeatureFailure:
-        """Disable ``feature`` because ``where`` (``step observer``, ``reset``...) raised ``exc``: its observers are
-        detached (also from a list being iterated now), its viewer services removed, its ``reset`` no longer
-        called; its ``summary``, ``report`` and ``outcome`` are still asked at the end. Logged in one line.
+        """Disable ``feature`` because ``where`` (``step observer``, ``reset``...) raised ``exc``: everything it
+        subscribed on the hub is detached (not called again, even by a delivery in progress; its ``reset`` and
+        ``entities_changed`` included), its viewer services removed; its ``summary``, ``report`` and ``outcome``
+        are still asked at the end. Logged in one line.
 
         Returns:
             The failure, also in ``feature_guard.failures`` and the run's report.
         """
         guard = self.feature_guard
         failure = guard.fail(feature, where, self.time, exc)
-        for attr in OBSERVER_LISTS:
-            setattr(self, attr, guard.detach(feature, getattr(self, attr), self.features))
+        self.events.detach(FeatureOwner(feature))
         for service in [name for name, owner in guard.services.items() if owner == feature]:
             self.services.pop(service, None)
         return failure
@@ -845,7 +830,7 @@ class Simulation:
         plugins.notify("sigcore_simulation_stopped", simulation=self)
 
     def step(self, n: int = 1) -> None:
-        """Advance ``n`` fixed steps: messages, forces, physics, contacts, controllers, sensors, observers.
+        """Advance ``n`` fixed steps: messages, forces, physics, contacts, controllers, sensors, the ``step`` channel.
 
         Raises:
             ApiError: no world is loaded (:meth:`unload_world`).
@@ -857,6 +842,7 @@ class Simulation:
         backend = self.backend
         dispatch = self.dispatch
         cameras = self.cameras
+        events = self.events
         for _ in range(n):
             if self._outbox:
                 self.deliver_messages()
@@ -866,29 +852,18 @@ class Simulation:
                 self._wrench.clear()
             backend.step()
             self.step_count += 1
-            if dispatch.collision_listeners or self.collision_observers:
+            if dispatch.collision_listeners or events.wanted("collision"):
                 self._collisions()
             if dispatch.has_actions:
                 dispatch.actions(self.step_count, self.time)
             for lidar in self.lidars:
                 if self.step_count % lidar.period_steps == 0:
-                    scan = lidar.scan(backend, self.time)
-                    for scan_observer in self.scan_observers:
-                        try:
-                            scan_observer(scan)
-                        except USER_ERRORS as e:
-                            if not self._contain(scan_observer, e, "scan observer"):
-                                raise
+                    events.emit("scan", lidar.scan(backend, self.time))
             if cameras.every and (self.step_count % cameras.every == 0 or cameras.in_flight):
                 cameras.capture(self.step_count)
             for odo in self.odometry.values():
                 odo.update(backend, self.step_count * self.dt)
-            for observer in self._step_observers:  # a try costs nothing until something raises (Python >= 3.11)
-                try:
-                    observer(self)
-                except USER_ERRORS as e:
-                    if not self._contain(observer, e, "step observer"):
-                        raise
+            events.emit("step", self)
 
     def reset(self, despawn: bool = True) -> None:
         """Restore the world's initial state; time goes on forward. Grasps, forces and queued messages are
@@ -921,14 +896,7 @@ class Simulation:
             odo.reset()
         for drive in self._drives.values():
             drive.reset()
-        for observer in list(self.reset_observers):
-            observer()
-        for name, feature in self.features.items():
-            if name not in self.feature_guard.disabled:
-                try:
-                    feature.reset()
-                except USER_ERRORS as e:
-                    self.disable_feature(name, "reset", e)
+        self.events.emit("reset", Reset(despawn))
 
     def poses(self) -> dict[str, tuple[Array, Array]]:
         """Main-part pose of every entity (used to compare runs)."""

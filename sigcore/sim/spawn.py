@@ -88,7 +88,8 @@ class SpawnRequest:
 
 @dataclass(frozen=True)
 class EntityChange:
-    """Entities added or removed while running, in the order they were (observers get one per spawn or delete).
+    """Entities added or removed while running, in the order they were (the ``entities`` event of ``sim.events``,
+    one per spawn or delete).
 
     Attributes:
         added: Names of the entities added (each is in ``sim.agents``, ``sim.world``, the backend, the scene...).
@@ -101,7 +102,7 @@ class EntityChange:
 
 @dataclass(frozen=True)
 class WorldChange:
-    """A world is about to be unloaded, or was just loaded (``Simulation.world_observers``).
+    """A world is about to be unloaded, or was just loaded (the ``world`` event of ``sim.events``).
 
     Attributes:
         kind: ``unloading``: the old world is still complete (its agents, entities, publications), and everything of

@@ -42,7 +42,7 @@ def _world(tmp_path: Path, make_world, objects: str, camera: str = "") -> World:
 
 def _frames(sim: Simulation, steps: int, before_step=None) -> list[CameraFrame]:
     frames: list[CameraFrame] = []
-    sim.camera_observers.append(frames.append)
+    sim.events.subscribe("camera", frames.append)
     for _ in range(steps):
         if before_step is not None:
             before_step(sim.step_count + 1)
@@ -155,7 +155,7 @@ def test_a_renderer_that_cannot_start_turns_cameras_off_not_the_run(tmp_path: Pa
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     sim = simulate(_world(tmp_path, make_world, WALL))
     frames: list[CameraFrame] = []
-    sim.camera_observers.append(frames.append)
+    sim.events.subscribe("camera", frames.append)
     sim.step(50)
     sim.cameras.settle()
     sim.cameras.close()

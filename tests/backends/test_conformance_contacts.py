@@ -16,7 +16,7 @@ BOX = '<object name="box" shape="box" size="0.1 0.1 0.1" pose="0 0 0.05"/>'
 
 def _listen(sim: Simulation) -> list[CollisionEvent]:
     events: list[CollisionEvent] = []
-    sim.collision_observers.append(events.append)
+    sim.events.subscribe("collision", events.append)
     return events
 
 

@@ -89,7 +89,7 @@ def test_collision_events_through_simulation(make_world, simulate) -> None:
     sim = simulate(make_world('<object name="base" shape="box" size="0.4 0.4 0.2" static="true" pose="0 0 0.1"/>'
                               '<object name="box" shape="box" size="0.1 0.1 0.1" pose="0 0 0.5"/>'))
     events: list[CollisionEvent] = []
-    sim.collision_observers.append(events.append)
+    sim.events.subscribe("collision", events.append)
     sim.step(50)
     assert not [e for e in events if "box" in (e.agent, e.other)]  # 0.1 s: still falling (lands at 0.22 s)
     sim.step(250)

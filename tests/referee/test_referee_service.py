@@ -82,7 +82,7 @@ def test_sender_must_connect_first(sim: Simulation) -> None:
 
 def test_service_only_referee_watches_nothing(sim: Simulation) -> None:
     """Without rules="cleanup" no collision observer is attached and items are not judged."""
-    assert sim.collision_observers == []
+    assert sim.events.subscriptions("collision") == ()
     sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
     run_for(sim, 2.0)
     assert _referee(sim).events == [] and _referee(sim).items is None

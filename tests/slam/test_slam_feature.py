@@ -48,7 +48,7 @@ def test_ate_on_a_short_route_below_1cm(room_sim: Simulation) -> None:
             x, y, _ = ground_truth(sim)
             truth.append((x, y))  # the robot starts at the world origin facing +x: map = world here
 
-    room_sim.add_step_observer(record)
+    room_sim.events.subscribe("step", record)
     drive_to(room_sim, ROUTE)
     est = np.array([(p.x, p.y) for _, p in slam.pose_history])
     ref = np.array(truth)
@@ -137,10 +137,10 @@ def test_world_without_the_plugin_pays_nothing() -> None:
     sim = Simulation(room_world(None), "mujoco")
     sim.step(100)
     assert "slam" not in sim.features
-    assert sim.scan_observers == [] and sim._step_observers == []
+    assert not sim.events.subscriptions("scan") and not sim.events.subscriptions("step")
     assert sim.odometry == {}
     with_slam = Simulation(room_world(PLUGIN_LINE), "mujoco")
-    assert len(with_slam.scan_observers) == 1 and len(with_slam._step_observers) == 1
+    assert len(with_slam.events.subscriptions("scan")) == 1 and len(with_slam.events.subscriptions("step")) == 1
 
 
 @pytest.mark.slow

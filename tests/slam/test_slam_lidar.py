@@ -53,7 +53,7 @@ def test_scan_fields_are_laserscan_shaped() -> None:
     """Scans come every 0.1 s stamped with the sim time, from the lidar link, with LaserScan angles in rad."""
     sim = Simulation(room_world(None), "mujoco")
     scans: list[Scan] = []
-    sim.scan_observers.append(scans.append)
+    sim.events.subscribe("scan", scans.append)
     sim.step(150)
     assert [round(s.stamp, 9) for s in scans] == [0.1, 0.2, 0.3]
     scan = scans[-1]

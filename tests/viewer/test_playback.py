@@ -279,7 +279,7 @@ def test_the_texts_are_those_the_live_viewer_showed(tmp_path: Path) -> None:
         if s.elapsed_steps == 10_000:
             viewer._post(v.reset)  # as the panel's Reset does
 
-    sim.add_step_observer(reset_at_20_s)
+    sim.events.subscribe("step", reset_at_20_s)
     try:
         report = run(sim, duration=40.0, transport=[viewer], realtime_factor=None, handle_signals=False)
     finally:

@@ -196,7 +196,7 @@ def test_message_reaches_the_agent(cleanup: Simulation, lockstep: Callable[[Simu
     or with no text is a note, nothing is delivered, and the simulation steps on."""
     lock = lockstep(cleanup)
     received: list[Message] = []
-    cleanup.message_observers.append(received.append)
+    cleanup.events.subscribe("message", received.append)
     snap = lock.run(v.send_message("robot_000", "hello"))
     assert newest_note(snap) == "sent to robot_000: hello"
     assert received == []  # queued: delivered before the next step
@@ -383,7 +383,7 @@ def test_run_services_the_viewer_and_frees_its_port(cleanup: Simulation,
 
     taken: list[Snapshot] = []
     viewer.snapshot_observers.append(taken.append)
-    cleanup.add_step_observer(at_step_100)
+    cleanup.events.subscribe("step", at_step_100)
     report = run(cleanup, steps=200, transport=[viewer], realtime_factor=None)
     assert (report.error, report.stopped_by, report.steps) == (None, None, 200)
     assert ran == [100]
@@ -432,7 +432,7 @@ def test_a_crashed_viewer_process_leaves_the_run_going(cleanup: Simulation, view
             assert viewer._proc is not None
             viewer._proc.wait(timeout=TIMEOUT)  # gone, its end of the socket closed, before step 51
 
-    cleanup.add_step_observer(kill_at_step_50)
+    cleanup.events.subscribe("step", kill_at_step_50)
     with caplog.at_level("WARNING", logger="sigcore.viewer"):
         report = run(cleanup, steps=3000, transport=[viewer], realtime_factor=None)
     assert (report.error, report.stopped_by, report.steps) == (None, None, 3000)

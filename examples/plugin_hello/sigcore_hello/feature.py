@@ -45,7 +45,7 @@ class HelloFeature(Feature):
         self.steps = 0
         self.sent = 0
         self._next = self.period
-        sim.add_step_observer(self._on_step)
+        sim.events.subscribe("step", self._on_step)
 
     def _on_step(self, sim: Simulation) -> None:
         self.steps += 1

@@ -61,7 +61,7 @@ class IkFeature(Feature):
         self.settings = SolverSettings()
         self.motions: dict[tuple[str, str], ArmMotion] = {}
         self.solves = 0
-        sim.add_step_observer(self._on_step)
+        sim.events.subscribe("step", self._on_step)
 
     # ------------------------------------------------------------------ solving
     def robot(self, name: str) -> RobotIk:

@@ -69,7 +69,7 @@ class Referee(Feature):
         sim.register_service(cfg.service, self.on_message)
         if cfg.rules == "cleanup" or cfg.time_limit > 0:
             self._every = max(1, round(1.0 / (cfg.rate * sim.dt)))
-            sim.add_step_observer(self._on_step)
+            sim.events.subscribe("step", self._on_step)
         self.topics = RefereeTopics(self)
 
     def _cleanup_rules(self) -> None:
@@ -92,7 +92,7 @@ class Referee(Feature):
                                  f"{' '.join(sorted(kinds)) or 'none'}); boxes: {offered}")
         self.items = ItemRule(sim, cfg, items, boxes, self.award)
         self.collisions = CollisionRule(sim, cfg, robots, self.award)
-        sim.collision_observers.append(self.collisions.on_collision)
+        sim.events.subscribe("collision", self.collisions.on_collision)
 
     def _trash_box(self, entity: Entity) -> TrashBox:
         """Entity ``entity`` (tagged ``box_tag``) as a trash box; :class:`BoxGeometryError` if its inner volume

@@ -210,7 +210,7 @@ class SimInterfaces:
                     w.done(_result(Result.RESULT_OK))
 
     def world_loaded(self) -> None:
-        """A world was loaded (``sim.world_observers``): STOPPED (the core leaves it paused at its time 0)."""
+        """A world was loaded (the ``world`` event): STOPPED (the core leaves it paused at its time 0)."""
         self.stopped = True
 
     def require_world(self, what: str) -> None:

@@ -85,7 +85,7 @@ class StandardEndpoints:
         self._timed_out: set[str] = set()  # robots whose cmd_vel timeout was logged (once each)
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
         self.add([h.name for h in sim.agents.values() if isinstance(h, RobotObj)])
-        sim.scan_observers.append(self._scan)
+        sim.events.subscribe("scan", self._scan)
 
     def _timing(self) -> None:
         """The step counts of the rates for the world's timestep (at start, and for each world loaded)."""

@@ -5,7 +5,7 @@ on the simulation thread in :meth:`Ros2Transport.service`, between steps, so the
 and the same inputs at the same steps give the same results. Publishing happens in step observers, stamped with
 the step's simulated time. The simulate_steps action has its own small node and executor thread.
 
-Worlds come and go while running (``load_world``, ``unload_world``; ``sim.world_observers``): the node, its context,
+Worlds come and go while running (``load_world``, ``unload_world``; the ``world`` event): the node, its context,
 the receiver, the action node and the simulation_interfaces services stay; the agents' endpoints and the robots'
 topics of the old world are destroyed and those of the new one created, with the settings the transport started
 with (``sim_prefix``, QoS, ``sigros_agents``).
@@ -213,7 +213,8 @@ class Ros2Transport(Transport):
         # the node's own parameter and type description services, answered between steps like the others
         self.node_services = NodeServices(node, receiver, lambda: sim.stamp_ns)
         self.sigros = SigRosEndpoints(sim, node, receiver, qos, agents) if config.sigros else None
-        self.standard = StandardEndpoints(sim, node, receiver, qos, config) if config.standard else None
+        with sim.events.owned_by(self):  # what they subscribe goes with the transport (stop)
+            self.standard = StandardEndpoints(sim, node, receiver, qos, config) if config.standard else None
         self.interfaces = SimInterfaces(sim, node, receiver, config.sim_prefix, self._after_reset)
         # everything the core and the features declare (the agents' published topics, /tf_static, /map, ...)
         # the agents' published topics: those of the selected world agents, and of agents spawned later that the
@@ -237,9 +238,9 @@ class Ros2Transport(Transport):
         for topic in qos.unused():
             log.warning("qos override for '%s' names no topic of this world; topics: %s", topic,
                         ", ".join(sorted(t for t in self.endpoints if t.startswith("/"))))
-        sim.add_step_observer(self._on_step)
-        sim.entity_observers.append(self._entities_changed)
-        sim.world_observers.append(self._world_changed)
+        sim.events.subscribe("step", self._on_step, owner=self)
+        sim.events.subscribe("entities", self._entities_changed, owner=self)
+        sim.events.subscribe("world", self._world_changed, owner=self)
         receiver.start()
         self._executor_thread.start()
         if self.standard is not None:
@@ -273,10 +274,7 @@ class Ros2Transport(Transport):
             return
         try:
             if self._sim is not None:
-                if self._entities_changed in self._sim.entity_observers:
-                    self._sim.entity_observers.remove(self._entities_changed)
-                if self._world_changed in self._sim.world_observers:
-                    self._sim.world_observers.remove(self._world_changed)
+                self._sim.events.detach(self)
                 self._sim.publications.disconnect(self.publications)
             if not self.publications.flush(FLUSH_TIMEOUT):
                 log.warning("some subscribers did not acknowledge the last messages within %g s", FLUSH_TIMEOUT)

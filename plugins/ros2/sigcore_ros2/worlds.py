@@ -2,8 +2,8 @@
 
 The core lists, parses, loads and unloads (``sigcore.world.catalogue``, ``Simulation.load_world`` /
 ``unload_world``); this module maps requests, sources and refusal codes. What the transport does when the world
-changes (endpoints, /clock, state) follows ``sim.world_observers`` (``Ros2Transport._world_changed``), so a world
-loaded by a library user is served the same way.
+changes (endpoints, /clock, state) follows the ``world`` event of ``sim.events`` (``Ros2Transport._world_changed``),
+so a world loaded by a library user is served the same way.
 
 Sources are local only: a path or a ``file://`` URI (``offline_only`` changes nothing). sigcore's world parser is
 strict: ``fail_on_unsupported_element=false`` and ``ignore_missing_or_unsupported_assets=true`` cannot make it ignore

@@ -139,8 +139,8 @@ class SlamFeature(Feature):
         self._last_odom: Pose2 | None = None
         self._pending: Scan | None = None
         self._declare(sim)
-        sim.scan_observers.append(self._on_scan)
-        sim.add_step_observer(self._on_step)
+        sim.events.subscribe("scan", self._on_scan)
+        sim.events.subscribe("step", self._on_step)
 
     def _declare(self, sim: Simulation) -> None:
         """The publications (``/map``, ``/<robot>/slam_pose``, ``map -> odom`` on ``/tf``) and the static

@@ -324,8 +324,8 @@ class WebViewer(Viewer):
         self._sim = sim
         self._wall0 = time.perf_counter()
         sim.publications.connect(self._displays)
-        sim.world_observers.append(self._world_changed)
-        sim.reset_observers.append(self._displays.restart)
+        sim.events.subscribe("world", self._world_changed, owner=self)
+        sim.events.subscribe("reset", lambda _: self._displays.restart(), owner=self)
         self._snapshot(force_layout=True)
 
     def stop(self) -> None:
@@ -334,10 +334,7 @@ class WebViewer(Viewer):
             if self.hold_at_end and self._sock is not None:
                 self._snapshot()  # the run's last moment: what the page holds until linger() ends
             sim.publications.disconnect(self._displays)
-            if self._world_changed in sim.world_observers:
-                sim.world_observers.remove(self._world_changed)
-            if self._displays.restart in sim.reset_observers:
-                sim.reset_observers.remove(self._displays.restart)
+            sim.events.detach(self)
             self._sim = None  # service() after stop() does nothing
         if not self.hold_at_end:
             self.close()
