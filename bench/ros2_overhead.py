@@ -228,16 +228,16 @@ def main() -> None:
         spawn(BARE_SERVER)
         sim_srv = f"/{robot}_get_obj_position"
         client = spawn(CLIENT, f"{sim_srv},/bare_get_obj_position", str(args.calls))
-        sim.control.stop = False
+        sim.control.rearm()
 
         def watch() -> None:
             client.wait()
-            sim.control.stop = True
+            sim.control.stop("bench")
 
         threading.Thread(target=watch, daemon=True).start()
         rtt_run = run(sim, transport=keep)
         result = json.loads(client.communicate(timeout=10)[0])
-        sim.control.stop = False
+        sim.control.rearm()
     finally:
         for p in procs:
             if p.poll() is None:

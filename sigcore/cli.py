@@ -473,7 +473,8 @@ def run(
                   "the run and prints the results", markup=False, soft_wrap=True)
 
     # the simulation's own control: transports pause, step and stop through it; --wait-for starts paused too
-    sim.control.paused = paused or gate is not None
+    if paused or gate is not None:
+        sim.control.pause()
     try:
         sim.dispatch.budget = CallbackBudget(callback_budget, disable_slow_controllers)
     except BudgetError as e:
@@ -887,7 +888,7 @@ def replay(
         out.print(f"  {line}", markup=False, soft_wrap=True)
     differs = not reproduced
     if until is not None and handover is not None:
-        sim.control.paused = True
+        sim.control.pause()
 
         def started(s: Simulation) -> None:
             err.print(f"ready: replayed to step {s.step_count} (t = {s.time:.3f} s), paused; transport "

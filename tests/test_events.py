@@ -216,6 +216,8 @@ def provoke(sim: Simulation, channel: str) -> None:
         sim.reset(despawn=False)
     elif channel == "input":
         sim.inputs.note("message", sender="moderator", to="bot", text="hi")
+    elif channel == "control":
+        sim.control.pause()
     elif channel == "world":
         sim.unload_world()
 
@@ -238,7 +240,7 @@ def test_a_feature_raising_on_any_channel_is_disabled_and_detached_from_every_ch
     if channel == "world":
         return  # unloaded: nothing more to provoke
     before = Counter(feature.seen)
-    for other in ("message", "step", "entities", "reset", "input"):
+    for other in ("message", "step", "entities", "reset", "input", "control"):
         provoke(sim, other)
     assert feature.seen == before and len(guard.failures) == 1
 

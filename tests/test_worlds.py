@@ -225,7 +225,7 @@ def test_observers_and_publications_follow_the_world(cleanup: World, arm6: World
     assert "/referee/score" in old_topics and "/referee/score" not in declared
     steps_now = sim.events.subscriptions("step")
     assert len(steps_now) == len(fresh.events.subscriptions("step")) + 1  # the features' + ours
-    sim.control.paused = False
+    sim.control.play()
     sim.step(2)
     assert steps == [1, 2, 3, 1, 2]
 
@@ -286,7 +286,7 @@ class WorldSwitcher(Transport):
         if not self.done and sim.elapsed_steps >= self.at:
             self.done = True
             sim.load_world(self.world)
-            sim.control.paused = False
+            sim.control.play()
 
     def stop(self) -> None:
         pass
@@ -352,6 +352,6 @@ def test_a_world_failing_while_being_built_leaves_no_world(cleanup: World, tmp_p
     assert e.value.code == "OPERATION_FAILED" and "exploding_device" in str(e.value)
     assert "no world is loaded" in str(e.value) and not sim.loaded and sim.entity_names == []
     sim.load_world(cleanup)
-    sim.control.paused = False
+    sim.control.play()
     sim.step(3)
     assert sim.loaded and "robot_000" in sim.agents and "referee" in sim.features

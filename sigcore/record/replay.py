@@ -272,8 +272,8 @@ class Replayer(Transport):
                 result = self._apply(sim, item)
             except ReplayError as e:  # the run ends before the next step, saying why (not a traceback)
                 self.error = str(e)
-                sim.control.paused = True
-                sim.control.request_stop("replay error")
+                sim.control.pause()
+                sim.control.stop("replay error")
                 return
             if result is not None:
                 self._held.append(result)

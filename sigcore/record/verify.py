@@ -196,7 +196,7 @@ class TruthCheck:
     def _diverged(self, sim: Simulation, step: int, index: int, frame: str, difference: float,
                   recorded: tuple[float, ...] | None, replayed: tuple[float, ...] | None, count: int) -> None:
         self.divergence = Divergence(step, step * self.dt, index, frame, difference, recorded, replayed, count)
-        sim.control.request_stop("the replay diverged from the recorded ground truth")
+        sim.control.stop("the replay diverged from the recorded ground truth")
 
     def _poses(self, sim: Simulation) -> tuple[list[str], np.ndarray]:
         """The names and poses ((n, 7): x, y, z, qw, qx, qy, qz) of every scene frame now, in the recorder's

@@ -1,11 +1,12 @@
 """The simulation: clock, fixed-step loop, event dispatch, run modes."""
 
+from .control import ControlChange, RunControl
 from .dispatch import ControllerFailure, SlowCallbacks
-from .exceptions import FeatureError, SimulationError
+from .exceptions import FeatureError, RunStateError, SimulationError
 from .feature_guard import FeatureFailure
 from .lidar import LidarSensor, Scan
 from .runner import RunReport, run
 from .simulation import Simulation
 
-__all__ = ["ControllerFailure", "FeatureError", "FeatureFailure", "LidarSensor", "RunReport", "Scan", "Simulation",
-           "SimulationError", "SlowCallbacks", "run"]
+__all__ = ["ControlChange", "ControllerFailure", "FeatureError", "FeatureFailure", "LidarSensor", "RunControl",
+           "RunReport", "RunStateError", "Scan", "Simulation", "SimulationError", "SlowCallbacks", "run"]

@@ -18,6 +18,7 @@ scene       ``sigcore.scene.Scene``                     after the scene changed 
 world       ``sigcore.sim.spawn.WorldChange``           before a world is unloaded and after one is loaded
 reset       :class:`Reset`                              after a reset restored the core's state
 input       ``sigcore.sim.inputs.Input``                when a command from outside is noted for replay
+control     ``sigcore.sim.control.ControlChange``       when a verb of the run control was done (play, pause...)
 ==========  ==========================================  ==================================================
 
 Subscribers of a channel are called in the order they subscribed. Subscribing or detaching while an event is
@@ -38,7 +39,8 @@ from typing import Any, Literal, get_args
 
 from ..isolation import USER_ERRORS
 
-Channel = Literal["step", "collision", "message", "scan", "camera", "entities", "scene", "world", "reset", "input"]
+Channel = Literal["step", "collision", "message", "scan", "camera", "entities", "scene", "world", "reset", "input",
+                  "control"]
 CHANNELS: tuple[Channel, ...] = get_args(Channel)
 
 Subscriber = Callable[[Any], object]

@@ -23,3 +23,9 @@ class FeatureError(SimulationError):
     def __init__(self, feature: str, where: str, cause: BaseException) -> None:
         self.feature, self.where, self.cause = feature, where, cause
         super().__init__(f"{where}: feature '{feature}' failed while being created: {describe(cause)}")
+
+
+class RunStateError(SigcoreError, ValueError):
+    """A verb of the run control (``sigcore.sim.control.RunControl``) cannot be done now or with that value (no world
+    is loaded; steps that are not a whole number of at least 1; a pace that is not a positive number); the message
+    says what would be valid."""

@@ -34,7 +34,7 @@ class RunReport:
         summary: What each feature reported.
         sim_time_run: Simulated time covered by this run [s] (in every world it ran).
         stopped_by: Why the run ended before its duration or steps: ``"SIGINT"`` or ``"SIGTERM"`` for a signal,
-            ``"request"`` for ``control.stop`` set by a transport (QUITTING) or a feature (e.g. the referee at the
+            ``"request"`` for ``control.stop()`` called by a transport (QUITTING) or a feature (e.g. the referee at the
             end of its task), ``"error"`` when something that is not user code raised (see ``error``); None when
             it ran to its end.
         feature_failures: Features disabled during the run (or while reporting at its end).
@@ -91,11 +91,11 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         transport: Transport | Sequence[Transport] | None = None, progress: Callable[[Simulation], None] | None = None,
         progress_every: float = 0.5, started: Callable[[Simulation], None] | None = None,
         handle_signals: bool = True, gate: StartGate | None = None) -> RunReport:
-    """Run ``sim`` until ``duration`` simulated seconds or ``steps`` steps have passed (or ``control.stop``).
+    """Run ``sim`` until ``duration`` simulated seconds or ``steps`` steps have passed (or ``control.stopping``).
 
     The simulation is started (:meth:`Simulation.start`), then the transport; at the end the transport is stopped
     and then the simulation (:meth:`Simulation.stop`), however the run ends. SIGINT and SIGTERM end it like a
-    ``control.stop`` request (see :func:`sigcore.sim.control.stop_on_signals`), so the report is never lost; a second
+    ``control.stop`` (see :func:`sigcore.sim.control.stop_on_signals`), so the report is never lost; a second
     signal while stopping raises ``KeyboardInterrupt``. User code never ends a run: a controller or a feature that
     raises (or calls ``sys.exit``) is disabled and the run goes on. Anything else that raises while starting the
     transport or stepping (the transport, the backend, a bug) ends the run with ``stopped_by="error"`` and the
@@ -107,7 +107,7 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         steps: Number of steps to run (wins over ``duration``).
         realtime_factor: None for as fast as possible; 1.0 for real time; 2.0 for twice real time (the start value
             of ``control.realtime_factor``, which a viewer may change while running).
-        control: Pause / lockstep / step-N / stop requests (default: ``sim.control``, which transports change).
+        control: The run's state (default: ``sim.control``, whose verbs transports and viewers call).
         transport: Serviced between steps (never during one); several (a transport and a viewer) are started in
             order, serviced in order (the first waits while the simulation is idle, the others are polled) and
             stopped in reverse order.
@@ -119,7 +119,7 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
             between steps while active; needs ``transport``.
     """
     control = control or sim.control
-    control.realtime_factor = realtime_factor
+    control.set_pace(realtime_factor)
     transports = [] if transport is None else [transport] if isinstance(transport, Transport) else list(transport)
     target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
     start_step, start_time = sim.elapsed_steps, sim.elapsed_time  # a world loaded while running starts at step 0
@@ -142,7 +142,7 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
     kinds: dict[str, list[str]] = {}
     for name, handle in sim.agents.items():
         kinds.setdefault(handle.kind, []).append(name)
-    stopped_by = "error" if error is not None else (control.stop_reason or "request") if control.stop else None
+    stopped_by = "error" if error is not None else (control.stop_reason or "request") if control.stopping else None
     summary, lines, outcome, results = sim.summary(), sim.report_lines(), sim.outcome(), sim.results()
     return RunReport(kinds, sim.elapsed_steps - start_step, sim.time, wall, list(sim.dispatch.failures), summary,
                      sim.elapsed_time - start_time, stopped_by, list(sim.feature_guard.failures),
@@ -187,10 +187,9 @@ def _loop(sim: Simulation, target: int | None, start_step: int, control: RunCont
     next_progress = wall0 + progress_every
     transport = transports[0] if transports else None
     others = transports[1:]
-    while not control.stop and (target is None or sim.elapsed_steps - start_step < target):
+    while not control.stopping and (target is None or sim.elapsed_steps - start_step < target):
         if transport is not None:
-            idle = control.paused or (control.lockstep and control.pending_steps == 0) or not sim.loaded
-            transport.service(0.01 if idle else 0.0)
+            transport.service(0.01 if control.idle or not sim.loaded else 0.0)
             for other in others:
                 other.service(0.0)
             if gate is not None and gate.active:
@@ -198,22 +197,17 @@ def _loop(sim: Simulation, target: int | None, start_step: int, control: RunCont
         if control.realtime_factor != realtime_factor:  # a viewer changed the pace: no catching up
             realtime_factor = control.realtime_factor
             pace_time, pace_wall = sim.time, _time.perf_counter()
-        if control.reset:
-            control.reset = False
-            sim.reset()
         if not sim.loaded:  # unloaded through the transport: wait for a world (the transport loads one)
-            control.pending_steps = 0
+            control.hold()
             if transport is None:
                 break
             continue
-        if control.paused or control.lockstep:
-            if control.pending_steps <= 0:
-                if transport is None:
-                    break  # nothing can ever resume us
-                sim.cameras.settle()  # idle: the images of the last steps are published now, not at the next step
-                pace_time, pace_wall = sim.time, _time.perf_counter()  # no catching up after a pause
-                continue
-            control.pending_steps -= 1
+        if not control.take_step():  # paused, nothing pending
+            if transport is None:
+                break  # nothing can ever resume us
+            sim.cameras.settle()  # idle: the images of the last steps are published now, not at the next step
+            pace_time, pace_wall = sim.time, _time.perf_counter()  # no catching up after a pause
+            continue
         sim.step()
         now = _time.perf_counter()
         if realtime_factor is not None:

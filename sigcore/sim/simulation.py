@@ -96,10 +96,14 @@ class Simulation:
         # library users subscribed), the publication contract and its sinks, the clock of the whole process
         self._backend_class: type[Backend] = (plugins.get_backend(backend) if isinstance(backend, str)
                                               else type(backend))
-        self.control = RunControl()
         self.events = Events(self._contain, self._owner_of)
-        """The event hub (``sigcore.sim.events``): step, collision, message, scan, camera, entities, scene, world and
-        reset; ``sim.events.subscribe(channel, fn)``."""
+        """The event hub (``sigcore.sim.events``): step, collision, message, scan, camera, entities, scene, world,
+        reset, input and control; ``sim.events.subscribe(channel, fn)``."""
+        self.control = RunControl(loaded=lambda: self.loaded, reset=lambda despawn: self.reset(despawn),
+                                  on_change=lambda change: self.events.emit("control", change),
+                                  step_count=lambda: self.step_count)
+        """The run's state and its verbs (play, pause, step, request_reset, set_pace, stop; ``sigcore.sim.control``),
+        which every client calls."""
         self._world_parts = _WorldParts()
         self._hooks: dict[Subscription, str] = {}  # the features' reset/entities_changed subscriptions -> hook name
         self.world_sources: list[Path] = []
@@ -639,8 +643,7 @@ class Simulation:
     def _world_ready(self) -> None:
         """A world was just set up while the process runs: paused at its time 0; its controllers' ``on_init``
         (and first ``on_action``) now if the run has started."""
-        c = self.control
-        c.paused, c.pending_steps, c.reset = True, 0, False
+        self.control.hold()
         if self._started:
             self.dispatch.init(self.time)
             self.dispatch.actions(self.step_count, self.time)

@@ -65,7 +65,7 @@ class StartGate:
     """Holds ``control`` paused until every :class:`WaitFor` has its peers (or ``timeout`` passed).
 
     The runner calls :meth:`poll` between steps while the gate is :attr:`active`. It plays the simulation
-    (``control.paused = False``) when every topic has had its peers for :data:`SETTLE` seconds, or after
+    (``control.play()``) when every topic has had its peers for :data:`SETTLE` seconds, or after
     ``timeout`` seconds with a warning; it lets go at once when something else played it (a client's PLAYING).
 
     Args:
@@ -118,13 +118,13 @@ class StartGate:
             if self._met is None:
                 self._met = now
             if now - self._met >= SETTLE:
-                control.paused = False
+                control.play()
                 self._end("matched", "every awaited topic has its peers: playing")
             return
         self._met = None
         waited = now - self._start
         if self.timeout and waited >= self.timeout:
-            control.paused = False
+            control.play()
             self._end("timeout", f"warning: playing after --wait-timeout {self.timeout:g} s although still "
                                  f"missing: {', '.join(missing)}")
             return

@@ -152,7 +152,7 @@ def start_in_process(monkeypatch: pytest.MonkeyPatch, world: Path, config: Ros2C
     for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
         monkeypatch.setenv(key, env[key])
     sim = Simulation(parse_world(world), "mujoco")
-    sim.control.paused = True
+    sim.control.pause()
     transport = Ros2Transport(config)
     transport.start(sim)
     return sim, transport, env

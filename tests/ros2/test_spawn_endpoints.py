@@ -71,7 +71,7 @@ def test_spawned_agents_follow_the_sigros_agents_selection(monkeypatch: pytest.M
     for key in ("ROS_DOMAIN_ID", "ROS_AUTOMATIC_DISCOVERY_RANGE"):
         monkeypatch.setenv(key, env[key])
     sim = Simulation(parse_world(WORLD), "bullet")
-    sim.control.paused = True
+    sim.control.pause()
     transport = Ros2Transport(Ros2Config(sigros_agents=("robots", "tag:keep")))
     transport.start(sim)
     try:

@@ -64,20 +64,15 @@ class Lockstep:
         viewer.start(sim)
 
     def tick(self) -> bool:
-        """One pass of the run loop: service the viewer, apply a reset it asked for, step unless paused.
+        """One pass of the run loop: service the viewer (its commands call the run control's verbs), step unless
+        paused with nothing pending.
 
         Returns:
             Whether the simulation stepped.
         """
         self.viewer.service(0.0)
-        control = self.sim.control
-        if control.reset:
-            control.reset = False
-            self.sim.reset()
-        if control.paused or control.lockstep:
-            if control.pending_steps <= 0:
-                return False
-            control.pending_steps -= 1
+        if not self.sim.control.take_step():
+            return False
         self.sim.step()
         return True
 
@@ -244,8 +239,9 @@ def test_move_entity(cleanup: Simulation, lockstep: Callable[[Simulation], Locks
 
 @pytest.mark.slow
 def test_reset_during_a_grasp(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
-    """Reset while robot_000 holds can_0: the note names the released object; at the next pass of the loop the
-    grasp is gone, the can is back where it started and the page no longer shows the old trial's events."""
+    """Reset while robot_000 holds can_0: the note names the released object; the reset is done when the command
+    runs (between steps, as simulation_interfaces' reset): the grasp is gone, the can is back where it started and
+    the page no longer shows the old trial's events."""
     lock = lockstep(cleanup)
     start = np.array(cleanup.backend.get_pose("can_0")[0])
     robot = cleanup.robot("robot_000")
@@ -260,12 +256,10 @@ def test_reset_during_a_grasp(cleanup: Simulation, lockstep: Callable[[Simulatio
     assert "robot_000 grasped can_0" in lock.show().texts["events"]
     snap = lock.run(v.reset)
     assert newest_note(snap) == "reset to the start: robot_000 let go of can_0"
-    assert cleanup.control.reset  # done by the run loop, between two steps
-    assert lock.tick()
-    assert not cleanup.control.reset
     assert cleanup.grasps.items() == []
     np.testing.assert_allclose(cleanup.backend.get_pose("can_0")[0], start, atol=1e-3)
-    after = lock.show()  # the old trial's events are gone with it (reset_observers); the score is the new one's
+    assert lock.tick()
+    after = lock.show()  # the old trial's events are gone with it (the reset event); the score is the new one's
     assert after.texts["events"] == "no events yet" and after.texts["score"] == "score: 0"
 
 

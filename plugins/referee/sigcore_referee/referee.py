@@ -170,7 +170,7 @@ class Referee(Feature):
         self.finished, self.result, self.end_time = True, result, self.sim.time
         self._record("end", why, 0)
         if self.config.stop_on_finish:
-            self.sim.control.stop = True
+            self.sim.control.stop("request")
 
     def reset(self) -> None:
         """Start a new trial from the current state: score, events and rules' memory cleared, clock restarted."""

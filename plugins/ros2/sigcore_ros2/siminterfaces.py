@@ -188,12 +188,12 @@ class SimInterfaces:
         """The SimulationState constant of the simulation now."""
         c = self.sim.control
         if not self.sim.loaded:
-            return SimulationState.STATE_QUITTING if c.stop else SimulationState.STATE_NO_WORLD
+            return SimulationState.STATE_QUITTING if c.stopping else SimulationState.STATE_NO_WORLD
         if self.stopped:
             return SimulationState.STATE_STOPPED
-        if c.stop:
+        if c.stopping:
             return SimulationState.STATE_QUITTING
-        return SimulationState.STATE_PAUSED if (c.paused or c.lockstep) else SimulationState.STATE_PLAYING
+        return SimulationState.STATE_PAUSED if c.paused else SimulationState.STATE_PLAYING
 
     def on_step(self, sim: Simulation) -> None:
         """Answer step requests whose target step was reached."""
@@ -329,7 +329,7 @@ class SimInterfaces:
         Raises:
             Refusal: OPERATION_FAILED (quitting, stopped) or INCORRECT_STATE (no world), saying why.
         """
-        if self.sim.control.stop:
+        if self.sim.control.stopping:
             raise Refusal(Result.RESULT_OPERATION_FAILED, f"{what} refused: the simulation is quitting")
         self.require_world(what)
         if self.stopped:
@@ -404,21 +404,22 @@ class SimInterfaces:
         if target == now:
             res.result = _result(SetSimulationState.Response.ALREADY_IN_TARGET_STATE, "already in that state")
             return False
-        if target == s.STATE_PLAYING:
+        if target == s.STATE_PLAYING:  # the run control's verbs: the same semantics as the viewer's buttons
             self.stopped = False
-            c.paused, c.lockstep = False, False
+            c.play()  # steps still requested are taken by playing: their requests are answered as they pass
         elif target == s.STATE_PAUSED:
             self.stopped = False
-            c.paused = True
+            c.pause()
+            self.fail_waiters("the simulation was paused before the requested steps were taken")
         elif target == s.STATE_STOPPED:
-            c.paused, c.pending_steps = True, 0
+            c.pause()
             self.fail_waiters("the simulation was stopped")
-            self.sim.reset()
+            c.request_reset()
             self.stopped = True
             self.on_reset()
         elif target == s.STATE_QUITTING:
             self.fail_waiters("the simulation is quitting")
-            c.stop = True
+            c.stop("request")
         else:
             res.result = _result(Result.RESULT_FEATURE_UNSUPPORTED,
                                  f"state {target} cannot be set; valid: 0 stopped, 1 playing, 2 paused, 3 quitting "
@@ -438,7 +439,7 @@ class SimInterfaces:
             return False
         # SCOPE_STATE alone keeps the spawned entities (back to their state as spawned); DEFAULT, ALL and any scope
         # with SCOPE_SPAWNED also delete them and bring back deleted world-file entities (time never goes back)
-        self.sim.reset(despawn=scope in (r.SCOPE_DEFAULT, r.SCOPE_ALL) or bool(scope & r.SCOPE_SPAWNED))
+        self.sim.control.request_reset(despawn=scope in (r.SCOPE_DEFAULT, r.SCOPE_ALL) or bool(scope & r.SCOPE_SPAWNED))
         self.on_reset()
         res.result = _result(Result.RESULT_OK)
         return False
@@ -463,10 +464,8 @@ class SimInterfaces:
         """Queue ``steps`` steps (simulation paused); ``done(Result)`` is called when they are taken, and
         ``progress(completed)`` after each of them."""
         c = self.sim.control
-        if self.stopped:
-            self.stopped = False
-            c.paused = True
-        c.pending_steps += steps
+        self.stopped = False
+        c.step(steps)  # pauses (from STOPPED: PAUSED)
         waiter = StepWaiter(self.sim.step_count + c.pending_steps, steps, done, progress)
         self.waiters.append(waiter)
         return waiter
@@ -476,7 +475,7 @@ class SimInterfaces:
         if waiter in self.waiters:
             self.waiters.remove(waiter)
             remaining = max(0, waiter.target - self.sim.step_count)
-            self.sim.control.pending_steps = max(0, self.sim.control.pending_steps - remaining)
+            self.sim.control.drop_steps(remaining)
 
 
 def _spawn_request(req: Any, uri: str, resource: str) -> SpawnRequest:

@@ -141,7 +141,7 @@ class WorldServices:
         Raises:
             Refusal: the simulation is quitting (OPERATION_FAILED), or the core's refusal with its code.
         """
-        if self.sim.control.stop:
+        if self.sim.control.stopping:
             raise Refusal(Result.RESULT_OPERATION_FAILED, "load_world refused: the simulation is quitting")
         uri, text = str(req.uri), str(req.resource_string)
         sim = self.sim
@@ -165,7 +165,7 @@ class WorldServices:
         Raises:
             Refusal: the simulation is quitting (OPERATION_FAILED).
         """
-        if self.sim.control.stop:
+        if self.sim.control.stopping:
             raise Refusal(Result.RESULT_OPERATION_FAILED, "unload_world refused: the simulation is quitting")
         if not self.sim.loaded:
             res.result = Result(result=UnloadWorld.Response.NO_WORLD_LOADED, error_message=NO_WORLD)

@@ -42,6 +42,7 @@ from sigcore.agent.robot import RobotObj
 from sigcore.api.call import call
 from sigcore.geometry import quat_to_matrix, quat_yaw
 from sigcore.publish import Publication, PublicationSink
+from sigcore.sim.exceptions import RunStateError
 from sigcore.text import clip, quote
 from sigcore.viewer import DEFAULT_PORT, VIEWER_SENDER, Viewer, ViewerError
 from sigcore.world.models import Object
@@ -644,8 +645,8 @@ class WebViewer(Viewer):
             self._rtf_window.pop(0)
         (w0, t0), (w1, t1) = self._rtf_window[0], self._rtf_window[-1]
         rtf = (t1 - t0) / (w1 - w0) if w1 - w0 > 0.2 else float("nan")
-        state = ("no world loaded" if not sim.loaded else "stopping" if control.stop else
-                 "paused" if control.paused or (control.lockstep and control.pending_steps <= 0) else
+        state = ("no world loaded" if not sim.loaded else "stopping" if control.stopping else
+                 "paused" if control.paused else
                  f"running ({pace_name(control.realtime_factor)})")
         rtf_text = "–" if math.isnan(rtf) else f"{rtf:.2f}"
         status = (f"**{state}** · world `{sim.world.name}` · t = {sim.time:.2f} s · step {sim.step_count} · "
@@ -816,18 +817,15 @@ class WebViewer(Viewer):
 
 # ------------------------------------------------------------------ the person's commands
 def play(sim: Simulation) -> str | None:
-    control = sim.control
-    if not sim.loaded:
-        return "no world is loaded: nothing to play"
-    control.paused = False
-    control.lockstep = False
-    control.pending_steps = 0
+    try:
+        sim.control.play()
+    except RunStateError as e:
+        return str(e)
     return None
 
 
 def pause(sim: Simulation) -> str | None:
-    sim.control.paused = True
-    sim.control.pending_steps = 0
+    sim.control.pause()
     return None
 
 
@@ -839,20 +837,20 @@ def step(n: Any) -> Command:
             return f"steps must be a whole number from 1 to 100000, got {quote(str(n))}"
         if not value.is_integer() or not (1 <= value <= 100000):
             return f"steps must be a whole number from 1 to 100000, got {n}"
-        count = int(value)
-        if not sim.loaded:
-            return "no world is loaded: nothing to step"
-        sim.control.paused = True
-        sim.control.pending_steps += count
+        try:
+            sim.control.step(int(value))
+        except RunStateError as e:
+            return str(e)
         return None
     return run
 
 
 def reset(sim: Simulation) -> str | None:
-    if not sim.loaded:
-        return "no world is loaded: nothing to reset"
-    held = sim.grasps.items()
-    sim.control.reset = True
+    held = sim.grasps.items() if sim.loaded else []
+    try:
+        sim.control.request_reset()
+    except RunStateError as e:
+        return str(e)
     if held:
         released = "; ".join(f"{robot} let go of {obj}" for robot, _, obj in held)
         return f"reset to the start: {released}"
@@ -863,7 +861,7 @@ def set_pace(name: str) -> Command:
     def run(sim: Simulation) -> str | None:
         if name not in PACES:
             return f"unknown pace {quote(name)}; valid: {', '.join(PACES)}"
-        sim.control.realtime_factor = PACES[name]
+        sim.control.set_pace(PACES[name])
         return None
     return run
 
