@@ -29,8 +29,8 @@ import time
 from pathlib import Path
 
 from sigcore.sim import Simulation
-from sigcore.sim.spawn import SpawnRequest
 from sigcore.world import parse_world
+from sigcore.world.resources import SpawnRequest
 
 ROOT = Path(__file__).resolve().parent.parent
 CLEANUP = ROOT / "worlds" / "cleanup.xml"

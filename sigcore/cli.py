@@ -749,7 +749,7 @@ def spawnables_cmd(
         world = parse_world(world_file) if world_file is not None else World()
     except WorldError as e:
         raise _fail([str(i) for i in e.issues]) from None
-    found = find_spawnables(world)
+    found = find_spawnables(world, plugins.spawnables().values())
     table = Table(title="spawnables (model://NAME)")
     for col in ("name", "origin", "description"):
         table.add_column(col)
@@ -768,7 +768,7 @@ def worlds_cmd(
     """List the worlds a running simulation may load (load_world): name, file, where found, tags, description."""
     from .world.catalogue import default_sources, find_worlds
 
-    found, problems = find_worlds(default_sources([], list(paths or [])))
+    found, problems = find_worlds(default_sources([], list(paths or []), plugins.worlds()))
     table = Table(title="worlds (load_world uri: a name, path or file:// URI)")
     for col in ("name", "file", "source", "tags", "description"):
         table.add_column(col)

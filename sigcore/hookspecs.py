@@ -30,10 +30,9 @@ if TYPE_CHECKING:
     from .backend import Backend
     from .feature import Feature
     from .sim.simulation import Simulation
-    from .sim.spawn import Spawnable
     from .transport import Transport
     from .viewer import Viewer
-    from .world.models import World
+    from .world.models import Spawnable, World
 
 hookspec = pluggy.HookspecMarker("sigcore")
 

@@ -30,9 +30,9 @@ from .isolation import USER_ERRORS, describe
 if TYPE_CHECKING:
     from .backend import Backend
     from .feature import Feature
-    from .sim.spawn import Spawnable
     from .transport import Transport
     from .viewer import Viewer
+    from .world.models import Spawnable
 
 GROUP = "sigcore"
 """Entry-point group that plugin distributions declare."""
@@ -316,12 +316,11 @@ def _spawnable_registrar(found: list[tuple[str, Any]], plugin: str) -> Callable[
     """``register(Spawnable)``: a valid name, not registered twice by this plugin; its origin becomes ``plugin``."""
     from dataclasses import replace
 
-    from .sim.spawn import Spawnable
-    from .world.models import valid_name
+    from .world.models import Spawnable, valid_name
 
     def register(spawnable: Spawnable) -> None:
         if not isinstance(spawnable, Spawnable):
-            raise TypeError(f"spawnable {spawnable!r} is not a sigcore.sim.spawn.Spawnable")
+            raise TypeError(f"spawnable {spawnable!r} is not a sigcore.world.models.Spawnable")
         if not valid_name(spawnable.name):
             raise ValueError(f"spawnable name {spawnable.name!r} is invalid; valid: a letter, then letters, "
                              "digits or '_'")

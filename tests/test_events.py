@@ -20,8 +20,8 @@ from sigcore.publish import Publication, PublicationSink
 from sigcore.sim import Simulation
 from sigcore.sim.events import CHANNELS, Channel, Events, Reset, Subscription
 from sigcore.sim.feature_guard import FeatureOwner
-from sigcore.sim.spawn import SpawnRequest
 from sigcore.world import parse_world
+from sigcore.world.resources import SpawnRequest
 
 ROOT = Path(__file__).parent.parent
 DATA = Path(__file__).parent / "data" / "sim"

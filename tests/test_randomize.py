@@ -24,9 +24,9 @@ from sigcore.cli import app
 from sigcore.sim import Simulation, run
 from sigcore.world import BareAgent, Entity, Object, World, WorldError, parse_world
 from sigcore.world.exceptions import RandomizeError, SeedError
+from sigcore.world.footprints import local_bounds
 from sigcore.world.randomization import Choice, Option, Randomize, RandomPose
 from sigcore.world.randomize import apply_seed, draw, sample
-from sigcore.world.spawnables import local_bounds
 
 ROOT = Path(__file__).resolve().parent.parent
 CLEANUP = ROOT / "worlds" / "cleanup.xml"

@@ -10,8 +10,9 @@ import trackers
 
 from sigcore.agent.exceptions import ApiError
 from sigcore.sim import Simulation
-from sigcore.sim.spawn import EntityChange, SpawnRefusal, SpawnRequest
+from sigcore.sim.spawn import EntityChange
 from sigcore.world import parse_world
+from sigcore.world.resources import SpawnRefusal, SpawnRequest
 
 ROOT = Path(__file__).resolve().parents[1]
 SIGBOT = ROOT / "worlds" / "models" / "sigbot" / "sigbot.urdf"

@@ -14,8 +14,8 @@ import pytest
 import sigcore
 from sigcore import plugins
 from sigcore.sim import Simulation
-from sigcore.sim.spawn import Spawnable
 from sigcore.world import Object, Robot, World, parse_world
+from sigcore.world.models import Spawnable
 from sigcore.world.spawnables import REPOSITORY_MODELS, find_spawnables, parse_element, spawnable
 
 ROOT = Path(__file__).parent.parent
@@ -150,7 +150,7 @@ def test_plugin_registers_spawnables(cleanup: World, tmp_path: Path) -> None:
     """A plugin's spawnables are listed after the folders', with the plugin's name as origin."""
     plugins.register_plugin(_plugin(Spawnable("crate", "a wooden crate", '<object shape="box" size="0.4 0.4 0.3"/>',
                                               str(tmp_path))), name="crates")
-    found = {s.name: s for s in find_spawnables(cleanup)}
+    found = {s.name: s for s in find_spawnables(cleanup, plugins.spawnables().values())}
     assert list(found)[-1] == "crate" and found["crate"].origin == "crates"
     assert found["crate"].bounds == ((-0.2, -0.2, -0.15), (0.2, 0.2, 0.15))
     assert plugins.spawnables()["crate"].origin == "crates"
@@ -182,7 +182,7 @@ def test_plugin_spawnable_that_does_not_validate_is_left_out(cleanup: World,
     """A plugin's element that does not validate is left out with a warning naming the plugin and the problem."""
     plugins.register_plugin(_plugin(Spawnable("blob", "?", '<object shape="blob" size="1"/>', "")), name="blobs")
     with caplog.at_level(logging.WARNING, logger="sigcore.spawnables"):
-        names = [s.name for s in find_spawnables(cleanup)]
+        names = [s.name for s in find_spawnables(cleanup, plugins.spawnables().values())]
     assert "blob" not in names and SHIPPED <= set(names)
     assert any("'blob' of plugin 'blobs'" in r.message and "shape" in r.message for r in caplog.records)
 

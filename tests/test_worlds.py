@@ -19,12 +19,13 @@ from sigcore.agent.exceptions import ApiError
 from sigcore.feature import Feature
 from sigcore.publish import Publication, PublicationSink
 from sigcore.sim import Simulation, run
-from sigcore.sim.spawn import SpawnRefusal, SpawnRequest, WorldChange
+from sigcore.sim.spawn import WorldChange
 from sigcore.transport import Transport
 from sigcore.world import parse_world
 from sigcore.world.catalogue import WORLDS_DIR, WorldRefusal, default_sources, find_worlds, matches, open_world
 from sigcore.world.exceptions import WorldError
 from sigcore.world.models import World
+from sigcore.world.resources import SpawnRefusal, SpawnRequest
 
 ROOT = Path(__file__).resolve().parents[1]
 CLEANUP = ROOT / "worlds" / "cleanup.xml"
@@ -65,7 +66,7 @@ def arm6() -> World:
 
 
 def _catalogue() -> list[Any]:
-    return find_worlds(default_sources([]))[0]
+    return find_worlds(default_sources([], registered=plugins.worlds()))[0]  # as the simulation passes them
 
 
 # ------------------------------------------------------------------ the catalogue

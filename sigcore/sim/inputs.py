@@ -19,7 +19,7 @@ Kinds (``Input.kind``) and their arguments:
 - ``entity_state``: simulation_interfaces' ``set_entity_state``: ``entity``, ``position``, ``quaternion`` (w, x, y,
   z), ``linear``, ``angular`` (None: not set);
 - ``spawn``: simulation_interfaces' ``spawn_entity`` / ``spawn_entities``, one input per call (a batch stays one
-  batch, so renaming and order are the same): ``requests`` (every :class:`~sigcore.sim.spawn.SpawnRequest` passed
+  batch, so renaming and order are the same): ``requests`` (every :class:`~sigcore.world.resources.SpawnRequest` passed
   to :meth:`Simulation.spawn`, in order, as a dict of its fields, tuples as lists), ``names`` (per request the name
   it got, or None when it was refused: a replay checks that it gets the same), ``what``; noted by
   :meth:`Inputs.note_spawn` after the call, refusals included;
@@ -45,8 +45,8 @@ from ..errors import SigcoreError
 if TYPE_CHECKING:
     from ..api.deferred import Deferred
     from ..api.table import ApiEntry
+    from ..world.resources import SpawnRefusal, SpawnRequest
     from .simulation import Simulation
-    from .spawn import SpawnRefusal, SpawnRequest
 
 REPLAYED = ("api", "base_velocity", "wheel_velocity", "message", "reset", "entity_state", "spawn", "delete",
             "entity_info")
@@ -100,7 +100,7 @@ def spawn_request_args(request: SpawnRequest) -> dict[str, Any]:
 
 def spawn_request_of(args: dict[str, Any]) -> SpawnRequest:
     """The request :func:`spawn_request_args` gave ``args`` for."""
-    from .spawn import SpawnRequest
+    from ..world.resources import SpawnRequest
 
     known = {f.name for f in fields(SpawnRequest)}
     unknown = sorted(set(args) - known)
@@ -177,7 +177,7 @@ class Inputs:
         elif item.kind == "spawn":
             self._spawn(item)
         elif item.kind == "delete":
-            from .spawn import SpawnRefusal
+            from ..world.resources import SpawnRefusal
 
             try:
                 sim.delete(list(a["entities"]))

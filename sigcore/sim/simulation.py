@@ -28,7 +28,17 @@ from ..publish import Publication, Publications, Publisher
 from ..scene import Scene
 from ..text import quote
 from ..world.exceptions import WorldError, WorldIssue
-from ..world.models import Entity, Object, Robot, World
+from ..world.models import Entity, Object, Robot, Spawnable, World
+from ..world.resources import (
+    RefusalCode,
+    SpawnRefusal,
+    SpawnRequest,
+    build_model,
+    check_pose,
+    normalize_namespace,
+    resource_element,
+    unique_name,
+)
 from ..world.urdf import UrdfModel
 from .camera import Cameras
 from .contacts import ContactTracker, rolling_parts
@@ -47,19 +57,7 @@ from .lidar import LidarSensor
 from .modes import Mode, Modes
 from .odometry import WheelOdometry
 from .owners import Owners
-from .spawn import (
-    EntityChange,
-    RefusalCode,
-    Spawnable,
-    SpawnRefusal,
-    SpawnRequest,
-    WorldChange,
-    build_model,
-    check_pose,
-    normalize_namespace,
-    resource_element,
-    unique_name,
-)
+from .spawn import EntityChange, WorldChange
 
 if TYPE_CHECKING:
     from ..world.catalogue import WorldResource
@@ -177,7 +175,7 @@ class Simulation:
         with self.events.owned_by(self._world_parts):
             self.description = DescriptionTopics(self)
         self.spawned: dict[str, str] = {}
-        """Entities added while running -> their namespace (``""`` or ``/ns``); ``sigcore.sim.spawn``."""
+        """Entities added while running -> their namespace (``""`` or ``/ns``); ``sigcore.world.resources``."""
         self._initial_world = world
         self._spawn_dir: Path | None = None
         self._attach_controllers(controllers)
@@ -323,7 +321,7 @@ class Simulation:
         with self.events.owned_by(self._world_parts if feature is None else FeatureOwner(feature)):
             source.attach(self, publishers)
 
-    # ------------------------------------------------------------------ run-time changes (sigcore.sim.spawn)
+    # ------------------------------------------------------------------ run-time changes (sigcore.world.resources)
     def namespace(self, agent: str) -> str:
         """The ROS namespace of ``agent``'s endpoints: ``""`` for the world file's, ``/ns`` for one spawned with
         a namespace."""
@@ -333,12 +331,12 @@ class Simulation:
         """What ``model://NAME`` may name (``sigcore.world.spawnables``)."""
         from ..world.spawnables import find_spawnables
 
-        return find_spawnables(self.world)
+        return find_spawnables(self.world, plugins.spawnables().values())
 
     def _spawnable(self, name: str) -> Spawnable:
         from ..world.spawnables import spawnable
 
-        return spawnable(self.world, name)
+        return spawnable(self.world, name, plugins.spawnables().values())
 
     def spawn(self, requests: Sequence[SpawnRequest]) -> list[str | SpawnRefusal]:
         """Add entities while running (between steps): each request is resolved and validated like a world file's
@@ -537,7 +535,7 @@ class Simulation:
         from ..world.catalogue import default_sources, find_worlds
 
         current = [p for p in (self.world.source if self.loaded else None, self._first_source) if p is not None]
-        found = default_sources(current, self.world_sources) + [(Path(p), "request") for p in sources]
+        found = default_sources(current, self.world_sources, plugins.worlds()) + [(Path(p), "request") for p in sources]
         return find_worlds(found)
 
     def load_world(self, world: World) -> None:

@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING
 
 from lxml import etree
 
-from ..sim.spawn import REPOSITORY, SpawnRefusal, find_file, path_is
 from ..text import clip
 from .exceptions import WorldError, WorldIssue, issue_code
+from .resources import REPOSITORY, SpawnRefusal, find_file, path_is
 
 if TYPE_CHECKING:
     from .models import World
@@ -116,15 +116,15 @@ def find_worlds(sources: Iterable[tuple[Path, str]]) -> tuple[list[WorldResource
     return worlds, problems
 
 
-def default_sources(current: Sequence[Path], extra: Sequence[Path] = ()) -> list[tuple[Path, str]]:
+def default_sources(current: Sequence[Path], extra: Sequence[Path] = (),
+                    registered: Sequence[tuple[Path, str]] = ()) -> list[tuple[Path, str]]:
     """The catalogue's sources: the current world's file (and the one the run started with), ``worlds/``, ``extra``
-    (the command line), the plugins'."""
-    from .. import plugins
-
+    (the command line), and ``registered``: the plugins' ``(path, plugin name)`` (``sigcore.plugins.worlds()``,
+    passed in by the caller: this layer does not know the registry)."""
     out: list[tuple[Path, str]] = [(path, "current") for path in current if path_is(path, "is_file")]
     out.append((WORLDS_DIR, "worlds/"))
     out += [(Path(p), "command line") for p in extra]
-    out += [(path, f"plugin {name}") for path, name in plugins.worlds()]
+    out += [(path, f"plugin {name}") for path, name in registered]
     return out
 
 

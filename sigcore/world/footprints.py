@@ -1,9 +1,10 @@
 """Boxes around entities and the tops they rest on, for placing entities without overlap
 (:mod:`sigcore.world.randomize`).
 
-An entity's box is :func:`sigcore.world.spawnables.local_bounds` (its visuals, in its own frame); turned by its
-orientation it becomes an axis-aligned box of offsets from its position, whose x-y part is its footprint. Only
-:mod:`math` is used, so that the same numbers come out on every machine.
+An entity's box is :func:`local_bounds` (its visuals, in its own frame); turned by its
+orientation it becomes an axis-aligned box of offsets from its position, whose x-y part is its footprint. The boxes
+are rounded to 6 decimals and the placement arithmetic uses only :mod:`math`, so that the same numbers come out on
+every machine.
 """
 
 from __future__ import annotations
@@ -12,8 +13,10 @@ import logging
 import math
 from dataclasses import dataclass
 
-from .models import Entity, World
-from .spawnables import Bounds, local_bounds
+import numpy as np
+
+from ..scene import entity_scene, links_in_root, visual_corners
+from .models import Entity, Robot, World
 
 log = logging.getLogger("sigcore.randomize")
 
@@ -27,8 +30,34 @@ LEVEL = 1e-6
 """Largest roll or pitch of a surface entity [rad]: beyond it its top is not level."""
 
 
+Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
+"""``(min xyz, max xyz)`` of a box [m]."""
+
+
+def local_bounds(entity: Entity, world: World) -> Bounds | None:
+    """The axis-aligned box around ``entity``'s visuals in its own frame (its pose ignored, joints at zero) [m];
+    None when a mesh's vertices cannot be read."""
+    scene = entity_scene(world, entity, lambda _robot, link: link)
+    frames: dict[str, tuple[np.ndarray, np.ndarray]] = {entity.name: (np.zeros(3), np.array([1.0, 0, 0, 0]))}
+    if isinstance(entity, Robot):
+        document = world.urdf(entity.name)
+        frames.update(links_in_root(document.root, document.model.root))
+    points = []
+    for visual in scene.visuals:
+        corners = visual_corners(visual, *frames[visual.frame])
+        if corners is None:
+            return None
+        points.append(corners)
+    if not points:
+        return None
+    every = np.vstack(points)
+    lo_, hi_ = (tuple(round(float(v), 6) + 0.0 for v in every.min(axis=0)),  # + 0.0: no -0.0
+                tuple(round(float(v), 6) + 0.0 for v in every.max(axis=0)))
+    return (lo_[0], lo_[1], lo_[2]), (hi_[0], hi_[1], hi_[2])
+
+
 def bounds_of(entity: Entity, world: World) -> Bounds | None:
-    """:func:`~sigcore.world.spawnables.local_bounds` of ``entity``; None when they are unknown (a mesh that
+    """:func:`local_bounds` of ``entity``; None when they are unknown (a mesh that
     cannot be read)."""
     try:
         return local_bounds(entity, world)

@@ -19,10 +19,21 @@ import random
 from dataclasses import dataclass
 
 from .exceptions import RandomizeError, SeedError, WorldIssue
-from .footprints import LEVEL, Box, Rect, Surface, bounds_of, grown, overlap_xy, overlap_z, placed_box, surface_of
+from .footprints import (
+    LEVEL,
+    Bounds,
+    Box,
+    Rect,
+    Surface,
+    bounds_of,
+    grown,
+    overlap_xy,
+    overlap_z,
+    placed_box,
+    surface_of,
+)
 from .models import AgentModel, BareAgent, Entity, Object, Pose, World
 from .randomization import Choice, Option, RandomPose, with_option
-from .spawnables import Bounds
 
 REST_GAP = 0.001
 """Height of an entity put on a surface above its top [m], so that it settles without starting in contact."""

@@ -19,16 +19,15 @@ from __future__ import annotations
 
 import logging
 import re
+from collections.abc import Iterable
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 from lxml import etree
 
-from ..scene import entity_scene, links_in_root, visual_corners
-from ..sim.spawn import Spawnable
 from .exceptions import WorldError, WorldIssue
-from .models import Entity, Robot, World, valid_name
+from .footprints import local_bounds
+from .models import Entity, Spawnable, World, valid_name
 from .parser import parse_world
 
 log = logging.getLogger("sigcore.spawnables")
@@ -44,24 +43,21 @@ _DECLARATION = re.compile(r"\A\ufeff?\s*<\?xml[^>]*\?>")
 _COMMENT = re.compile(r"<!--.*?-->", re.S)
 _START = re.compile(r"<([A-Za-z_][\w.\-:]*)")
 
-Bounds = tuple[tuple[float, float, float], tuple[float, float, float]]
-
-
 class SpawnableError(WorldError):
     """A spawnable's element does not validate (the issues say where, in its ``spawnable.xml``)."""
 
 
-def find_spawnables(world: World) -> list[Spawnable]:
-    """Every spawnable ``world`` may spawn: its ``models/`` folder's, the repository's, then the plugins'.
+def find_spawnables(world: World, registered: Iterable[Spawnable] = ()) -> list[Spawnable]:
+    """Every spawnable ``world`` may spawn: its ``models/`` folder's, the repository's, then ``registered``.
 
     Args:
         world: The running world (its file's folder may have a ``models/`` of its own).
+        registered: The plugins' (``sigcore.plugins.spawnables()``, passed in by the caller: this layer does not
+            know the registry); each is validated once, a broken one left out with a warning.
 
     Returns:
         The valid spawnables, by source then name; broken ones are left out with a warning.
     """
-    from .. import plugins
-
     found: dict[str, Spawnable] = {}
 
     def add(spawnable: Spawnable) -> None:
@@ -75,7 +71,7 @@ def find_spawnables(world: World) -> list[Spawnable]:
     for folder in _model_folders(world):
         for spawnable in folder_spawnables(folder):
             add(spawnable)
-    for spawnable in sorted(plugins.spawnables().values(), key=lambda s: s.name):
+    for spawnable in sorted(registered, key=lambda s: s.name):
         if spawnable not in _PLUGINS:
             try:
                 _PLUGINS[spawnable] = _validated(spawnable, Path(spawnable.base) / f"<plugin {spawnable.origin}>")
@@ -88,13 +84,13 @@ def find_spawnables(world: World) -> list[Spawnable]:
     return list(found.values())
 
 
-def spawnable(world: World, name: str) -> Spawnable:
-    """The spawnable called ``name`` (``model://NAME``) for ``world``.
+def spawnable(world: World, name: str, registered: Iterable[Spawnable] = ()) -> Spawnable:
+    """The spawnable called ``name`` (``model://NAME``) for ``world`` (``registered``: see :func:`find_spawnables`).
 
     Raises:
         KeyError: no such spawnable; the message lists the available ones.
     """
-    every = find_spawnables(world)
+    every = find_spawnables(world, registered)
     for s in every:
         if s.name == name:
             return s
@@ -180,28 +176,6 @@ def parse_element(text: str, file: Path, name: str) -> tuple[Entity, World]:
         raise SpawnableError([_issue(file, f"{len(world.agents)} elements; valid: exactly one <robot>, <object> "
                                            "or <human>")])
     return world.entities[0], world
-
-
-def local_bounds(entity: Entity, world: World) -> Bounds | None:
-    """The axis-aligned box around ``entity``'s visuals in its own frame (its pose ignored, joints at zero) [m];
-    None when a mesh's vertices cannot be read."""
-    scene = entity_scene(world, entity, lambda _robot, link: link)
-    frames: dict[str, tuple[np.ndarray, np.ndarray]] = {entity.name: (np.zeros(3), np.array([1.0, 0, 0, 0]))}
-    if isinstance(entity, Robot):
-        document = world.urdf(entity.name)
-        frames.update(links_in_root(document.root, document.model.root))
-    points = []
-    for visual in scene.visuals:
-        corners = visual_corners(visual, *frames[visual.frame])
-        if corners is None:
-            return None
-        points.append(corners)
-    if not points:
-        return None
-    every = np.vstack(points)
-    lo_, hi_ = (tuple(round(float(v), 6) + 0.0 for v in every.min(axis=0)),  # + 0.0: no -0.0
-                tuple(round(float(v), 6) + 0.0 for v in every.max(axis=0)))
-    return (lo_[0], lo_[1], lo_[2]), (hi_[0], hi_[1], hi_[2])
 
 
 def _tag_end(text: str, pos: int) -> int:

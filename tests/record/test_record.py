@@ -26,8 +26,8 @@ from sigcore.record.recorder import _TfLayout
 from sigcore.record.serialize import SerializeError, Serializer
 from sigcore.sim import Simulation, run
 from sigcore.sim.inputs import Input, ReplayError, refusal
-from sigcore.sim.spawn import SpawnRefusal, SpawnRequest
 from sigcore.world import parse_world
+from sigcore.world.resources import SpawnRefusal, SpawnRequest
 
 ROOT = Path(__file__).resolve().parents[2]
 CLEANUP = ROOT / "worlds" / "cleanup.xml"

@@ -10,8 +10,8 @@ from referee_worlds import BOXES, ITEMS, MODERATOR, ROOT, make_sim, run_for
 from sigcore_referee import Referee
 
 from sigcore.sim import Simulation
-from sigcore.sim.spawn import SpawnRequest
 from sigcore.world import parse_world
+from sigcore.world.resources import SpawnRequest
 
 BACKENDS = ("mujoco", "bullet")
 CAN = '<object shape="cylinder" size="0.033 0.12" mass="0.05" graspable="true" tags="trash can"/>'

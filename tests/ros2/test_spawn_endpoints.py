@@ -19,8 +19,8 @@ from sigcore_ros2.config import Ros2Config  # noqa: E402
 from sigcore_ros2.transport import Ros2Transport  # noqa: E402
 
 from sigcore.sim.simulation import Simulation  # noqa: E402
-from sigcore.sim.spawn import SpawnRequest  # noqa: E402
 from sigcore.world import parse_world  # noqa: E402
+from sigcore.world.resources import SpawnRequest  # noqa: E402
 
 pytestmark = pytest.mark.ros2
 

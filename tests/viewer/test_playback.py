@@ -415,7 +415,7 @@ def test_a_recording_that_cannot_be_shown_is_refused_naming_what_is_missing(reco
 def test_an_entity_spawned_while_running_is_drawn_from_then_on(tmp_path: Path) -> None:
     """A crate spawned at 1 s (noted in the input log as the ROS 2 transport notes it): the playback's scene has
     it, hidden before its spawn and shown where the ground truth has it after; nothing is listed as not drawn."""
-    from sigcore.sim.spawn import SpawnRequest
+    from sigcore.world.resources import SpawnRequest
 
     sim = Simulation(parse_world(CLEANUP), "mujoco")
     recorder = Recorder(sim, tmp_path / "spawned")

@@ -52,8 +52,8 @@ from simulation_interfaces.srv import (
 
 from sigcore.agent.exceptions import ApiError
 from sigcore.api.call import log_key
-from sigcore.sim.spawn import RefusalCode, SpawnRefusal, SpawnRequest
 from sigcore.text import clip, quote
+from sigcore.world.resources import RefusalCode, SpawnRefusal, SpawnRequest
 
 from .convert import finite, stamp
 from .siminfo import EntityQueries, Refusal, bounds_box

@@ -18,10 +18,10 @@ from typing import TYPE_CHECKING, Any
 from simulation_interfaces.msg import Resource, Result, WorldResource
 from simulation_interfaces.srv import GetAvailableWorlds, GetCurrentWorld, LoadWorld, UnloadWorld
 
-from sigcore.sim.spawn import RefusalCode
 from sigcore.text import clip, quote
 from sigcore.world.catalogue import WorldRefusal, find_worlds, matches, open_world
 from sigcore.world.catalogue import WorldResource as Listed
+from sigcore.world.resources import RefusalCode
 
 from .siminfo import Refusal, tags_of
 
