@@ -2,9 +2,13 @@
 at which it took effect, so that a run can be re-simulated exactly (``sigcore replay``).
 
 The simulation is deterministic and applies commands only between steps: a transport runs what its clients send
-when it is serviced, a viewer what a person does. Whoever applies such a command tells :class:`Inputs` (``sim.inputs``,
-the one owner of the log) with :meth:`Inputs.note`; a recorder subscribes to the ``input`` channel of
-``sim.events`` and keeps them.
+when it is serviced, a viewer what a person does. Every such command goes through a verb of :class:`Inputs`
+(``sim.inputs``, the one owner of the log: :meth:`~Inputs.base_velocity`, :meth:`~Inputs.wheel_velocity`,
+:meth:`~Inputs.message`, :meth:`~Inputs.entity_state`, :meth:`~Inputs.entity_info`, :meth:`~Inputs.spawn`,
+:meth:`~Inputs.delete`, :meth:`~Inputs.load_world`, :meth:`~Inputs.unload_world`), or through the API table
+(:func:`sigcore.api.call`) or :meth:`Simulation.reset`, which note themselves: the core applies the command and notes
+it, whichever client applied it, so a new transport cannot forget to. A recorder subscribes to the ``input`` channel
+of ``sim.events`` and keeps them.
 A command noted at step ``k`` (``sim.step_count``) took effect after step ``k``'s physics and before step ``k + 1``'s:
 a replay applies it there (:meth:`Inputs.apply`), before stepping on.
 
@@ -45,7 +49,9 @@ from ..errors import SigcoreError
 if TYPE_CHECKING:
     from ..api.deferred import Deferred
     from ..api.table import ApiEntry
+    from ..world.models import World
     from ..world.resources import SpawnRefusal, SpawnRequest
+    from .info import EntityInfo
     from .simulation import Simulation
 
 REPLAYED = ("api", "base_velocity", "wheel_velocity", "message", "reset", "entity_state", "spawn", "delete",
@@ -136,6 +142,72 @@ class Inputs:
             self.note("spawn", requests=[spawn_request_args(r) for r in requests],
                       names=[o if isinstance(o, str) else None for o in outcomes], what=what)
 
+    # ------------------------------------------------------------------ commands from outside: applied, then noted
+    def base_velocity(self, robot: str, linear: float, angular: float) -> None:
+        """Drive ``robot``'s base (a ``cmd_vel``): ``linear`` [m/s], ``angular`` [rad/s].
+
+        Raises:
+            ApiError: no such robot, it has no drive, or a value is not finite (nothing noted then).
+        """
+        self._sim.robot(robot).set_base_velocity(linear, angular)
+        self.note("base_velocity", robot=robot, linear=linear, angular=angular)
+
+    def wheel_velocity(self, robot: str, left: float, right: float) -> None:
+        """Set ``robot``'s wheel velocities directly [rad/s] (a ``cmd_vel`` timeout stops them so)."""
+        self._sim.robot(robot).set_wheel_velocity(left, right)
+        self.note("wheel_velocity", robot=robot, left=left, right=right)
+
+    def message(self, sender: str, to: str, text: str) -> None:
+        """Send a text message to agent ``to`` from ``sender`` (a viewer, a person, a client): delivered before the
+        next step."""
+        self._sim.send_msg(sender, to, text)
+        self.note("message", sender=sender, to=to, text=text)
+
+    def entity_state(self, entity: str, position: Sequence[float], quaternion: Sequence[float],
+                     linear: Sequence[float] | None = None, angular: Sequence[float] | None = None) -> None:
+        """Put ``entity`` at ``position`` [m] with orientation ``quaternion`` (w, x, y, z), and give it ``linear``
+        [m/s] and ``angular`` [rad/s] velocities (None: not set)."""
+        handle = self._sim.agent(entity)
+        handle.set_position(tuple(position))
+        handle.set_rotation(tuple(quaternion))
+        if linear is not None:
+            handle.set_velocity(tuple(linear))
+            handle.set_angular_velocity(tuple(angular if angular is not None else (0.0, 0.0, 0.0)))
+        self.note("entity_state", entity=entity, position=list(position), quaternion=list(quaternion),
+                  linear=list(linear) if linear is not None else None,
+                  angular=list(angular) if linear is not None and angular is not None else None)
+
+    def entity_info(self, entity: str, category: str, description: str, tags: Sequence[str],
+                    what: str = "") -> EntityInfo:
+        """Replace ``entity``'s category, description and tags (``sim.info``); the information now."""
+        info = self._sim.info.set(entity, category, description, list(tags))
+        self.note("entity_info", entity=entity, category=info.category, description=info.description,
+                  tags=list(info.tags), what=what or f"set_entity_info {entity}")
+        return info
+
+    def spawn(self, requests: Sequence[SpawnRequest], what: str = "") -> list[str | SpawnRefusal]:
+        """:meth:`Simulation.spawn` of ``requests`` (one call), noted with what each gave (refusals included)."""
+        outcomes = self._sim.spawn(requests)
+        self.note_spawn(requests, outcomes, what or f"spawn ({len(requests)})")
+        return outcomes
+
+    def delete(self, names: Sequence[str], what: str = "") -> None:
+        """:meth:`Simulation.delete` of ``names``; noted when done (a refusal raises and notes nothing)."""
+        self._sim.delete(names)
+        self.note("delete", entities=list(names), what=what or f"delete {', '.join(names)}")
+
+    def load_world(self, world: World, uri: str = "", resource_string: str = "") -> None:
+        """:meth:`Simulation.load_world` of ``world`` (named by ``uri`` or given as ``resource_string``); noted
+        first, as it ends what the recording can replay."""
+        self.note("world", what=f"load_world {world.name}", uri=uri, resource_string=resource_string)
+        self._sim.load_world(world)
+
+    def unload_world(self) -> None:
+        """:meth:`Simulation.unload_world`; noted first."""
+        self.note("world", what="unload_world")
+        self._sim.unload_world()
+
+    # ------------------------------------------------------------------ replay
     def apply(self, item: Input) -> tuple[ApiEntry, str, Deferred] | None:
         """Apply ``item`` again (a replay), exactly as it was applied: through the same core paths. An API call whose
         answer is deferred returns ``(entry, agent, deferred)``: the caller polls it after each step
@@ -158,20 +230,15 @@ class Inputs:
             result = call(sim, entry, a["agent"], a["request"])
             return (entry, a["agent"], result) if isinstance(result, Deferred) else None
         if item.kind == "base_velocity":
-            sim.robot(a["robot"]).set_base_velocity(a["linear"], a["angular"])
+            self.base_velocity(a["robot"], a["linear"], a["angular"])
         elif item.kind == "wheel_velocity":
-            sim.robot(a["robot"]).set_wheel_velocity(a["left"], a["right"])
+            self.wheel_velocity(a["robot"], a["left"], a["right"])
         elif item.kind == "message":
-            sim.send_msg(a["sender"], a["to"], a["text"])
+            self.message(a["sender"], a["to"], a["text"])
         elif item.kind == "reset":
             sim.reset(despawn=bool(a.get("despawn", True)))
         elif item.kind == "entity_state":
-            handle = sim.agent(a["entity"])
-            handle.set_position(tuple(a["position"]))
-            handle.set_rotation(tuple(a["quaternion"]))
-            if a.get("linear") is not None:
-                handle.set_velocity(tuple(a["linear"]))
-                handle.set_angular_velocity(tuple(a["angular"]))
+            self.entity_state(a["entity"], a["position"], a["quaternion"], a.get("linear"), a.get("angular"))
         elif (why := refusal(item)) is not None:
             raise ReplayError(why)
         elif item.kind == "spawn":
@@ -180,7 +247,7 @@ class Inputs:
             from ..world.resources import SpawnRefusal
 
             try:
-                sim.delete(list(a["entities"]))
+                self.delete(list(a["entities"]), a.get("what", ""))
             except SpawnRefusal as e:
                 raise ReplayError(f"step {item.step}: deleting {', '.join(map(repr, a['entities']))} is refused "
                                   f"now ({e.code}: {e}), it was done when recorded") from None
@@ -188,7 +255,7 @@ class Inputs:
             from ..agent.exceptions import ApiError
 
             try:
-                sim.info.set(a["entity"], a["category"], a["description"], list(a["tags"]))
+                self.entity_info(a["entity"], a["category"], a["description"], list(a["tags"]), a.get("what", ""))
             except ApiError as e:
                 raise ReplayError(f"step {item.step}: set_entity_info of {a['entity']!r} is refused now ({e}), it "
                                   "was done when recorded") from None
@@ -200,7 +267,7 @@ class Inputs:
             requests = [spawn_request_of(r) for r in item.args["requests"]]
         except ReplayError as e:
             raise ReplayError(f"step {item.step}: {e}") from None
-        outcomes = self._sim.spawn(requests)
+        outcomes = self.spawn(requests, item.args.get("what", ""))
         names = item.args.get("names")
         if names is None:
             return

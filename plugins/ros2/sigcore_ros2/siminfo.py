@@ -174,9 +174,8 @@ class EntityQueries:
         if code not in CATEGORY_NAMES:
             raise Refusal(Result.RESULT_OPERATION_FAILED, f"category {code} is unknown; valid: {_VALID_CATEGORIES}")
         try:
-            info = self.sim.info.set(req.entity, CATEGORY_NAMES[code], req.info.description, list(req.info.tags))
-            self.sim.inputs.note("entity_info", entity=req.entity, category=info.category, description=info.description,
-                                 tags=list(info.tags), what=f"set_entity_info {req.entity}")
+            self.sim.inputs.entity_info(req.entity, CATEGORY_NAMES[code], req.info.description, list(req.info.tags),
+                                        what=f"set_entity_info {req.entity}")
         except ApiError as e:
             raise Refusal(Result.RESULT_OPERATION_FAILED, f"entity {quote(req.entity)}: {clip(str(e), 300)}") from None
         res.result = _ok()

@@ -301,25 +301,18 @@ class SimInterfaces:
         if not finite(*twist):
             res.result = _result(Result.RESULT_OPERATION_FAILED, "twist must be finite")
             return False
-        handle = self.sim.agent(req.entity)
         moving = any(v != 0.0 for v in twist)
         if moving and not self.sim.mode(req.entity, "dynamics"):
             res.result = _result(Result.RESULT_OPERATION_FAILED,
                                  f"'{req.entity}' is static (dynamics off): it cannot be given a velocity")
             return False
+        dynamic = self.sim.mode(req.entity, "dynamics")
         try:
-            handle.set_position((p.x, p.y, p.z))
-            handle.set_rotation(q)
-            if self.sim.mode(req.entity, "dynamics"):
-                handle.set_velocity((lin.x, lin.y, lin.z))
-                handle.set_angular_velocity((ang.x, ang.y, ang.z))
+            self.sim.inputs.entity_state(req.entity, (p.x, p.y, p.z), q, (lin.x, lin.y, lin.z) if dynamic else None,
+                                         (ang.x, ang.y, ang.z) if dynamic else None)
         except ApiError as e:
             res.result = _result(Result.RESULT_OPERATION_FAILED, str(e))
             return False
-        dynamic = self.sim.mode(req.entity, "dynamics")
-        self.sim.inputs.note("entity_state", entity=req.entity, position=[p.x, p.y, p.z], quaternion=list(q),
-                             linear=[lin.x, lin.y, lin.z] if dynamic else None,
-                             angular=[ang.x, ang.y, ang.z] if dynamic else None)
         res.result = _result(Result.RESULT_OK)
         return False
 
@@ -339,8 +332,7 @@ class SimInterfaces:
     def _spawn_entity(self, req: Any, res: Any, reply: Any) -> bool:
         self._require_changeable("spawning")
         request = _spawn_request(req, req.uri, req.resource_string)
-        outcome = self.sim.spawn([request])[0]
-        self.sim.inputs.note_spawn([request], [outcome], what=f"spawn_entity {req.name or req.uri}")
+        outcome = self.sim.inputs.spawn([request], what=f"spawn_entity {req.name or req.uri}")[0]
         res.result, res.entity_name = _spawned(outcome)
         return False
 
@@ -348,9 +340,7 @@ class SimInterfaces:
         self._require_changeable("spawning")
         requests = [_spawn_request(r, r.entity_resource.uri, r.entity_resource.resource_string)
                     for r in req.spawn_requests]
-        outcomes = self.sim.spawn(requests) if requests else []
-        if requests:
-            self.sim.inputs.note_spawn(requests, outcomes, what=f"spawn_entities ({len(requests)})")
+        outcomes = self.sim.inputs.spawn(requests, what=f"spawn_entities ({len(requests)})") if requests else []
         res.results = []
         for outcome in outcomes:
             result, name = _spawned(outcome)
@@ -369,8 +359,7 @@ class SimInterfaces:
     def _delete_entity(self, req: Any, res: Any, reply: Any) -> bool:
         self._require_changeable("deleting")
         try:
-            self.sim.delete([req.entity])
-            self.sim.inputs.note("delete", entities=[req.entity], what=f"delete_entity {req.entity}")
+            self.sim.inputs.delete([req.entity], what=f"delete_entity {req.entity}")
         except SpawnRefusal as refusal:
             res.result = _result(SPAWN_CODES[refusal.code], str(refusal))
             return False

@@ -223,11 +223,10 @@ class StandardEndpoints:
 
         def handle(msg: Twist) -> None:
             try:
-                robot.set_base_velocity(msg.linear.x, msg.angular.z)
+                self.sim.inputs.base_velocity(robot.name, msg.linear.x, msg.angular.z)
             except ApiError as e:  # the transport's log filter lets one record per (topic, kind) through
                 log.warning("%s refused: %s", topic, clip(str(e)), extra=log_key(topic, type(e).__name__))
                 return
-            self.sim.inputs.note("base_velocity", robot=robot.name, linear=msg.linear.x, angular=msg.angular.z)
             if steps:
                 self._cmd_vel_deadline[robot.name] = self.sim.step_count + steps
 
@@ -239,8 +238,7 @@ class StandardEndpoints:
         for name, deadline in list(self._cmd_vel_deadline.items()):
             if step >= deadline:
                 del self._cmd_vel_deadline[name]
-                self.sim.robot(name).set_wheel_velocity(0.0, 0.0)
-                self.sim.inputs.note("wheel_velocity", robot=name, left=0.0, right=0.0)
+                self.sim.inputs.wheel_velocity(name, 0.0, 0.0)
                 if name not in self._timed_out:
                     self._timed_out.add(name)
                     log.info("/%s/cmd_vel: no message for %g s: wheels stopped (cmd_vel_timeout of its <drive>; "

@@ -150,8 +150,7 @@ class WorldServices:
         except WorldRefusal as refusal:
             raise _load_refusal(refusal, req) from None
         try:
-            sim.inputs.note("world", what=f"load_world {world.name}", uri=uri, resource_string=text)
-            sim.load_world(world)
+            sim.inputs.load_world(world, uri, text)
         except WorldRefusal as refusal:
             raise _load_refusal(refusal, req) from None
         self._text = (world, text) if not uri.strip() else None
@@ -170,8 +169,7 @@ class WorldServices:
         if not self.sim.loaded:
             res.result = Result(result=UnloadWorld.Response.NO_WORLD_LOADED, error_message=NO_WORLD)
             return False
-        self.sim.inputs.note("world", what="unload_world")
-        self.sim.unload_world()
+        self.sim.inputs.unload_world()
         self._text = None
         res.result = _ok()
         return False

@@ -875,8 +875,7 @@ def send_message(agent: str, text: str) -> Command:
         if agent not in sim.agents:
             return (f"agent {quote(agent)} no longer exists: the message was not sent; agents: "
                     f"{', '.join(sim.agents) or 'none'}")
-        sim.send_msg(VIEWER_SENDER, agent, text)
-        sim.inputs.note("message", sender=VIEWER_SENDER, to=agent, text=text)
+        sim.inputs.message(VIEWER_SENDER, agent, text)
         return f"sent to {agent}: {clip(text, 80)}"
     return run
 
