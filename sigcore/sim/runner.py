@@ -1,4 +1,4 @@
-"""Run modes: as fast as possible, real time (or a factor of it), paused, lockstep."""
+"""Run modes: as fast as possible, real time (or a factor of it), paused, stepped by a client (`sim.control`)."""
 
 from __future__ import annotations
 
