@@ -102,7 +102,6 @@ class Simulation:
                                   step_count=lambda: self.step_count)
         """The run's state and its verbs (play, pause, step, request_reset, set_pace, stop; ``sigcore.sim.control``),
         which every client calls."""
-        self._world_parts = _WorldParts()
         self._hooks: dict[Subscription, str] = {}  # the features' reset/entities_changed subscriptions -> hook name
         self.world_sources: list[Path] = []
         """World files and folders :meth:`available_worlds` lists besides ``worlds/`` (``sigcore run --worlds``)."""
