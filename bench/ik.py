@@ -119,7 +119,7 @@ def bench_moves(world_file: str, robot: str, chain_name: str, m: int, rng: np.ra
         finals.append(res["final_error"] if res["success"] else float("nan"))
         if not res["success"]:
             print(f"    move failed: {res['message']}")
-    gains = sim.robot_model(robot).gains
+    gains = sim.entities.robot_model(robot).gains
     return {"success": ok / m, "final_median_mm": 1e3 * float(np.nanmedian(finals)),
             "final_max_mm": 1e3 * float(np.nanmax(finals)), "duration_median_s": statistics.median(durations),
             "skipped": skipped, "kp": gains.kp, "kv": gains.kv, "max_torque": gains.max_torque}

@@ -167,7 +167,7 @@ def main() -> None:
     world = parse_world(args.world)
     sim = Simulation(world, "mujoco")
     robot = next(a.name for a in world.agents if a.kind == "robot")
-    lidar = sim.lidars[0].model.name
+    lidar = sim.entities.lidars[0].model.name
     transport = Ros2Transport(Ros2Config(clock_rate=args.clock_rate, clock_wall_limit=args.clock_wall_limit,
                                          state_rate=50.0))
     t0 = time.perf_counter()
@@ -248,7 +248,7 @@ def main() -> None:
     print(f"world: {args.world}  timestep {dt} s  endpoints: {len(transport.endpoints)} (created in {started:.2f} s)")
     limit = f", at most {args.clock_wall_limit:g}/s of wall time" if args.clock_wall_limit > 0 else ""
     print(f"/clock: {'every step' if args.clock_rate <= 0 else f'{args.clock_rate:g} Hz'}{limit};  "
-          f"tf/odom/joint_states 50 Hz;  lidar {sim.lidars[0].model.rate:g} Hz;  "
+          f"tf/odom/joint_states 50 Hz;  lidar {sim.entities.lidars[0].model.rate:g} Hz;  "
           f"{args.rounds} alternating rounds x {args.steps} steps; load average {os.getloadavg()[0]:.1f}")
     for label, r, target in (("no subscriber", quiet, 0.6),
                              ("a subscriber process on /clock, /tf, odom, joint_states, scan", loaded, 0.5)):

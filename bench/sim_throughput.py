@@ -26,8 +26,15 @@ import numpy as np
 from sigcore.agent import CollisionEvent
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
+from sigcore.world.models import Robot, World
 
 ROOT = Path(__file__).resolve().parent.parent
+
+
+def without_lidars(world: World) -> World:
+    """``world`` with no ``<lidar>`` on any robot (the framework's cost per step without sensors)."""
+    return world.with_agents(tuple(a.model_copy(update={"lidars": ()}) if isinstance(a, Robot) else a
+                                   for a in world.agents))
 
 
 def main() -> None:
@@ -54,7 +61,7 @@ def main() -> None:
     for _ in range(200):
         mujoco.mj_step(model, raw)
 
-    lidars = [(lidar, model.body(f"{lidar.robot}/{lidar.model.link}").id) for lidar in sim.lidars]
+    lidars = [(lidar, model.body(f"{lidar.robot}/{lidar.model.link}").id) for lidar in sim.entities.lidars]
     mask = np.zeros(6, dtype=np.uint8)
     mask[0] = 1
 
@@ -71,7 +78,9 @@ def main() -> None:
                                        lidar.model.range[1])
 
     rates: dict[str, list[float]] = {"raw": [], "raw+lidar": [], "sigcore": [], "sigcore-nolidar": []}
-    saved_lidars = sim.lidars
+    quiet = Simulation(without_lidars(world), "mujoco")
+    quiet.events.subscribe("collision", events.append)
+    quiet.step(200)
     for r in range(args.rounds):
         t0 = time.perf_counter()
         for _ in range(args.steps):
@@ -83,16 +92,14 @@ def main() -> None:
         t0 = time.perf_counter()
         sim.step(args.steps)
         rates["sigcore"].append(args.steps / (time.perf_counter() - t0))
-        sim.lidars = []
         t0 = time.perf_counter()
-        sim.step(args.steps)
+        quiet.step(args.steps)
         rates["sigcore-nolidar"].append(args.steps / (time.perf_counter() - t0))
-        sim.lidars = saved_lidars
 
     dt = world.timestep
     med = {k: statistics.median(v) for k, v in rates.items()}
     print(f"world: {args.world}  timestep: {dt} s  bodies: {model.nbody}  geoms: {model.ngeom}  "
-          f"lidars: {', '.join(f'{x.model.beams} beams at {x.model.rate} Hz' for x in sim.lidars) or 'none'}")
+          f"lidars: {', '.join(f'{x.model.beams} beams at {x.model.rate} Hz' for x in sim.entities.lidars) or 'none'}")
     print(f"rounds: {args.rounds} x {args.steps} steps each, alternating")
     for k, label in (("raw", "raw mj_step"), ("raw+lidar", "raw mj_step + mj_multiRay lidar"),
                      ("sigcore", "sigcore step (all on)"), ("sigcore-nolidar", "sigcore step, no lidar")):

@@ -33,8 +33,15 @@ from sigcore.agent import CollisionEvent
 from sigcore.geometry import quat_to_matrix
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
+from sigcore.world.models import Robot, World
 
 ROOT = Path(__file__).resolve().parent.parent
+
+
+def without_lidars(world: World) -> World:
+    """``world`` with no ``<lidar>`` on any robot (the framework's cost per step without sensors)."""
+    return world.with_agents(tuple(a.model_copy(update={"lidars": ()}) if isinstance(a, Robot) else a
+                                   for a in world.agents))
 
 
 def main() -> None:
@@ -69,7 +76,7 @@ def main() -> None:
     def raw_lidar_steps(n: int, step0: int) -> None:
         for i in range(step0 + 1, step0 + n + 1):
             pb.stepSimulation(physicsClientId=raw)
-            for lidar in sim.lidars:
+            for lidar in sim.entities.lidars:
                 if i % lidar.period_steps == 0:
                     pos, quat = raw_backend.get_pose(lidar.robot, lidar.model.link)
                     dirs = lidar._local @ quat_to_matrix(quat).T
@@ -79,8 +86,10 @@ def main() -> None:
 
     rates: dict[str, list[float]] = {"raw": [], "raw+lidar": [], "sigcore": [], "sigcore-nolidar": [],
                                      "sigcore-core": []}
-    saved_lidars = sim.lidars
-    step_subscriptions = sim.events.subscriptions("step")
+    quiet = Simulation(without_lidars(world), "bullet")
+    quiet.events.subscribe("collision", events.append)
+    quiet.step(200)
+    step_subscriptions = quiet.events.subscriptions("step")
     cpu: dict[str, list[float]] = {k: [] for k in rates}
 
     def timed(key: str, run: Callable[[], None]) -> None:
@@ -97,18 +106,16 @@ def main() -> None:
         timed("raw", raw_steps)
         timed("raw+lidar", lambda: raw_lidar_steps(args.steps, r * args.steps))  # noqa: B023 (called at once)
         timed("sigcore", lambda: sim.step(args.steps))
-        sim.lidars = []
-        timed("sigcore-nolidar", lambda: sim.step(args.steps))
+        timed("sigcore-nolidar", lambda: quiet.step(args.steps))
         for subscription in step_subscriptions:
             subscription.cancel()
-        timed("sigcore-core", lambda: sim.step(args.steps))
-        step_subscriptions = tuple(sim.events.subscribe("step", s.fn, s.owner) for s in step_subscriptions)
-        sim.lidars = saved_lidars
+        timed("sigcore-core", lambda: quiet.step(args.steps))
+        step_subscriptions = tuple(quiet.events.subscribe("step", s.fn, s.owner) for s in step_subscriptions)
 
     dt = world.timestep
     med = {k: statistics.median(v) for k, v in rates.items()}
     print(f"world: {args.world}  timestep: {dt} s  bodies: {pb.getNumBodies(physicsClientId=raw)}  "
-          f"lidars: {', '.join(f'{x.model.beams} beams at {x.model.rate} Hz' for x in sim.lidars) or 'none'}")
+          f"lidars: {', '.join(f'{x.model.beams} beams at {x.model.rate} Hz' for x in sim.entities.lidars) or 'none'}")
     print(f"pybullet {pb.getAPIVersion()}; rounds: {args.rounds} x {args.steps} steps each, alternating")
     for k, label in (("raw", "raw stepSimulation"), ("raw+lidar", "raw stepSimulation + rayTestBatch lidar"),
                      ("sigcore", "sigcore step (all on)"), ("sigcore-nolidar", "sigcore step, no lidar"),

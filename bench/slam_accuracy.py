@@ -228,7 +228,7 @@ def main() -> None:
     err = est[:, :2] - ref[:, :2]
     dyaw = np.arctan2(np.sin(est[:, 2] - ref[:, 2]), np.cos(est[:, 2] - ref[:, 2]))
     length = float(np.sum(np.hypot(*np.diff(ref[:, :2], axis=0).T)))
-    odo = sim.odometry[ROBOT].state
+    odo = sim.entities.odometry[ROBOT].state
     odo_err = math.hypot(odo.x - ref[-1, 0], odo.y - ref[-1, 1])
     ms = np.asarray(slam.scan_times) * 1e3
     cpu = np.asarray(slam.scan_cpu_times) * 1e3

@@ -66,15 +66,15 @@ def figures(backend: str, repeats: int, steps: int) -> dict[str, float]:
         sim = Simulation(parse_world(CLEANUP), backend=backend)
         sim.step(10)
         start = time.perf_counter()
-        [name] = sim.spawn([SpawnRequest(name=f"one_{r}", resource=BOX, xyz=_spot(0))])
+        [name] = sim.entities.spawn([SpawnRequest(name=f"one_{r}", resource=BOX, xyz=_spot(0))])
         one.append(time.perf_counter() - start)
         assert isinstance(name, str), name
         start = time.perf_counter()
-        names = sim.spawn([SpawnRequest(name=f"b{i}", resource=BOX, xyz=_spot(i + 1)) for i in range(10)])
+        names = sim.entities.spawn([SpawnRequest(name=f"b{i}", resource=BOX, xyz=_spot(i + 1)) for i in range(10)])
         ten.append(time.perf_counter() - start)
         assert all(isinstance(n, str) for n in names), names
         start = time.perf_counter()
-        sim.delete([name])
+        sim.entities.delete([name])
         gone.append(time.perf_counter() - start)
     out["spawn1_ms"] = 1000 * statistics.median(one)
     out["spawn10_ms"] = 1000 * statistics.median(ten)
@@ -84,10 +84,10 @@ def figures(backend: str, repeats: int, steps: int) -> dict[str, float]:
     churned = Simulation(parse_world(CLEANUP), backend=backend)
     churned.step(10)
     for i in range(20):
-        result = churned.spawn([SpawnRequest(name=f"c{i}", resource=BOX, xyz=_spot(i))])
+        result = churned.entities.spawn([SpawnRequest(name=f"c{i}", resource=BOX, xyz=_spot(i))])
         assert isinstance(result[0], str), result
         churned.step(5)
-    churned.delete([f"c{i}" for i in range(0, 20, 2)])
+    churned.entities.delete([f"c{i}" for i in range(0, 20, 2)])
     kept = [f"c{i}" for i in range(1, 20, 2)]
     text = CLEANUP.read_text()
     boxes = "".join(f'<object name="{n}" shape="box" size="0.1 0.1 0.1" mass="0.2" '

@@ -50,7 +50,7 @@ def main() -> int:
     sim = Simulation(parse_world(ROOT / "worlds" / "cleanup.xml"), "mujoco")
     layout = layout_of(sim)
     poses = sim.backend.get_poses(layout.parts)
-    names = list(sim.entity_names)
+    names = list(sim.entities.names)
     with contextlib.redirect_stdout(io.StringIO()):  # viser's banner
         server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
     posted: list[tuple[object, ...]] = []

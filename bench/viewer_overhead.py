@@ -596,7 +596,7 @@ def main() -> None:
                 viewer = viewers[VIEWER[c]] if c in VIEWER else None
                 before_t, before_p, before_c = _thread_cpu(viewer_pids), _proc_cpu(all_pids), _cpu_ticks()
                 busy0 = transport.busy if transport else 0.0
-                pushed0, step0 = (viewer.pushed if viewer else 0), sim.elapsed_steps
+                pushed0, step0 = (viewer.pushed if viewer else 0), sim.worlds.elapsed_steps
                 preempted0 = _preempted()
                 c0 = time.thread_time()
                 rep = run(sim, steps=args.steps, realtime_factor=None, transport=transport)
@@ -626,7 +626,7 @@ def main() -> None:
                 if viewer is not None and transport is not None:
                     use[c]["service"] += transport.busy - busy0
                     use[c]["updates"] += viewer.pushed - pushed0
-                    ranges[c].append((step0, sim.elapsed_steps))
+                    ranges[c].append((step0, sim.worlds.elapsed_steps))
                     text += f" ({viewer.pushed - pushed0} updates)"
                 line.append(text)
                 time.sleep(0.3)  # the viewers' processes finish, the browsers catch up: nothing spills over
@@ -639,7 +639,7 @@ def main() -> None:
             pin_all()
         all_pids = [pid for b in browsers.values() for pid in b.pids]
         sim = sims["viewer"]
-        step0 = sim.elapsed_steps
+        step0 = sim.worlds.elapsed_steps
         others = [b for v, b in browsers.items() if v != "A"]
         for b in others:
             b.signal(signal.SIGSTOP)
@@ -739,7 +739,7 @@ def main() -> None:
              "frame": "next animation frame after"}
     phases = [(f"{LABELS[c]}, as fast as possible", VIEWER[c], ranges[c]) for c in ("viewer", "niced", "frozen",
                                                                                      "alone") if c in conditions]
-    phases.append(("viewer A, real time", "A", [(step0, sims["viewer"].elapsed_steps)]))
+    phases.append(("viewer A, real time", "A", [(step0, sims["viewer"].worlds.elapsed_steps)]))
     for label, v, spans in phases:
         lat: dict[str, list[float]] = {"push": [], "dom": [], "frame": []}
         for first, end in spans:

@@ -55,10 +55,10 @@ def figures(backend: str, repeats: int, steps: int) -> dict[str, float]:
     for _ in range(repeats):
         sim = Simulation(arm6, backend)
         sim.step(10)
-        loads.append(_timed(lambda sim=sim: sim.load_world(cleanup)))
+        loads.append(_timed(lambda sim=sim: sim.worlds.load(cleanup)))
     reused = Simulation(cleanup, backend)
     for i in range(20):
-        reused.load_world(arm6 if i % 2 == 0 else cleanup)
+        reused.worlds.load(arm6 if i % 2 == 0 else cleanup)
     assert reused.world is cleanup
     fresh = Simulation(cleanup, backend)
     a, b = [], []

@@ -435,7 +435,7 @@ def run(
     world = _parse(world_file)
     layout = _draw(world, seed_value, "running it with the poses as written")
     sim = _load(world_file, backend, controller, layout.world if layout is not None else world)
-    sim.world_sources = list(worlds or [])
+    sim.worlds.sources = list(worlds or [])
     _check_endpoints(transport_obj, sim)
     gate = _gate(wait_for, wait_timeout, paused, transport_obj, sim)
     recorder = _video(sim, video, video_camera, video_fps)
@@ -453,9 +453,9 @@ def run(
     def progress(s: Simulation) -> None:
         if not show_progress or total is None or time.perf_counter() - t0 < 2.0:
             return
-        done = s.elapsed_steps
+        done = s.worlds.elapsed_steps
         line = (f"  t = {s.time:8.2f} s  ({100 * done / max(total, 1):5.1f} %, "
-                f"{s.elapsed_time / (time.perf_counter() - t0):.1f}x real time)")
+                f"{s.worlds.elapsed_time / (time.perf_counter() - t0):.1f}x real time)")
         if tty:
             err.print(line, end="\r")
         else:
@@ -476,7 +476,7 @@ def run(
     if paused or gate is not None:
         sim.control.pause()
     try:
-        sim.dispatch.budget = CallbackBudget(callback_budget, disable_slow_controllers)
+        sim.entities.controllers.budget = CallbackBudget(callback_budget, disable_slow_controllers)
     except BudgetError as e:
         raise _fail([f"--callback-budget: {e}"]) from None
     drawn = f", drawn with seed {seed_value}" if layout is not None and world.randomize is not None else ""
@@ -641,7 +641,7 @@ def check(
     sim = _load(world_file, backend, world=layout.world if layout is not None else world)
     _check_endpoints(transport_obj, sim)
     with_transport = f", endpoints of '{transport_obj.name}' checked" if transport_obj is not None else ""
-    out.print(f"{world_file}: ok ({len(sim.agents)} agents, built with '{backend}'{with_transport})")
+    out.print(f"{world_file}: ok ({len(sim.entities)} agents, built with '{backend}'{with_transport})")
 
 
 @app.command()
@@ -681,7 +681,7 @@ def api(
         req = ", ".join(entry.request.model_fields) if entry.request else entry.ros_type
         res = ", ".join(entry.response.model_fields) if entry.response else ""
         # the transport may leave some agents' endpoints out (ROS 2: sigros_agents)
-        agents = [a for a, h in sim.agents.items() if h.kind in entry.kinds and (
+        agents = [a for a, h in sim.entities.items() if h.kind in entry.kinds and (
             entry.direction != "publish" or entry.name_for(a) in agent_topics)
             and (not described or entry.name_for(a) in described)]
         for agent in agents:
@@ -697,15 +697,15 @@ def api(
     for name in sorted(others):
         kind, what = others[name]
         print(f"  {name:<40} {kind:<45} {what}")
-    by_agent = {a: sum(1 for n in per_agent if n.startswith(a) and n[len(a):len(a) + 1] == "_") for a in sim.agents}
+    by_agent = {a: sum(1 for n in per_agent if n.startswith(a) and n[len(a):len(a) + 1] == "_") for a in sim.entities}
     print()
-    for agent, handle in sim.agents.items():
+    for agent, handle in sim.entities.items():
         print(f"  {agent} ({handle.kind}): {by_agent[agent]} endpoints")
     if every:
         print("\nevery agent endpoint")
         for name in sorted(per_agent):
             print(f"  {name:<50} {per_agent[name]}")
-    print(f"{len(sim.agents)} agents, {len(per_agent)} agent endpoints, {len(others)} others, "
+    print(f"{len(sim.entities)} agents, {len(per_agent)} agent endpoints, {len(others)} others, "
           f"{len(per_agent) + len(others)} in all")
 
 

@@ -90,7 +90,7 @@ class Feature(ABC):
 
     def entities_changed(self, change: EntityChange) -> None:
         """Entities were added or removed while running (spawned, deleted): ``change.added`` are in
-        ``sim.agents`` and the backend now, ``change.removed`` are gone. Called on the simulation thread between
+        ``sim.entities`` and the backend now, ``change.removed`` are gone. Called on the simulation thread between
         steps, after the core's own state was updated; the default does nothing."""
         return None
 

@@ -72,7 +72,7 @@ class Transport(ABC):
         out = [Endpoint(entry.name_for(agent), entry.ros_type, "service" if entry.direction == "service" else "topic",
                         f"'{entry.suffix}' of {handle.kind} '{agent}'", agent)
                for entry in sim.api_entries() if entry.direction != "publish"
-               for agent, handle in sim.agents.items() if handle.kind in entry.kinds]
+               for agent, handle in sim.entities.items() if handle.kind in entry.kinds]
         return out + publication_endpoints(sim)
 
     def describe(self, sim: Simulation) -> dict[str, str]:

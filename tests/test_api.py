@@ -98,7 +98,7 @@ def test_viewer_services(sim: Simulation) -> None:
     """check/connect/send_msg_to_srv reach a registered service; unknown services and unconnected agents are refused."""
     t = _by_suffix()
     got = []
-    sim.register_service("referee", lambda sender, text: got.append((sender, text)))
+    sim.features.register_service("referee", lambda sender, text: got.append((sender, text)))
     assert not call(sim, t["_check_service"], "bot", {"service_name": "referee"})["connected"]  # not yet
     assert not call(sim, t["_check_service"], "bot", {"service_name": "judge"})["connected"]
     r = call(sim, t["_send_msg_to_srv"], "bot", {"name": "referee", "msg": "Referee/hi/1"})
@@ -116,7 +116,7 @@ def test_fuzzed_requests_never_raise(sim: Simulation) -> None:
     """Every entry, fed wrong types, NaN, huge numbers, unknown names and unknown fields, answers (never raises),
     and the simulation keeps stepping with finite state."""
     rng = np.random.default_rng(1)
-    agents = list(sim.agents)
+    agents = list(sim.entities)
     n = 0
     for entry in api_table():
         if entry.request is None:
@@ -134,7 +134,7 @@ def test_fuzzed_requests_never_raise(sim: Simulation) -> None:
             n += 1
         sim.step(2)
     assert n > 400
-    for name in sim.entity_names:
+    for name in sim.entities.names:
         pos, quat = sim.backend.get_pose(name)
         assert np.all(np.isfinite(pos)) and np.all(np.isfinite(quat))
     assert math.isfinite(sim.time)

@@ -17,7 +17,7 @@ def _entry(suffix: str) -> ApiEntry:
 
 def _inbox(sim: Simulation, name: str = "referee") -> list[tuple[str, str]]:
     got: list[tuple[str, str]] = []
-    sim.register_service(name, lambda sender, text: got.append((sender, text)))
+    sim.features.register_service(name, lambda sender, text: got.append((sender, text)))
     return got
 
 

@@ -26,12 +26,12 @@ FIELD_POOLS = {"name": "names", "to": "names", "owner": "names", "sender": "name
 
 def _pools(sim: Simulation) -> dict[Any, list[Any]]:
     hostile = ["", "x" * 5000, "ü\u200b/../..", "[/tmp/data] %s {}", "robot_000 "]
-    names = list(sim.agents) + ["no_such_entity", "ground"]
+    names = list(sim.entities) + ["no_such_entity", "ground"]
     parts = ["", "body", "base_link", "no_part", "l_gripper_link", "LEFT", "right"]
     joints = ["", "wheel_l_joint", "wheel_r_joint", "head_pan_joint", "l_elbow_joint", "no_joint"]
-    for robot in (n for n, h in sim.agents.items() if h.kind == "robot"):
-        joints += [j.name for j in sim.urdf(robot).movable_joints][:6]
-        parts += list(sim.urdf(robot).links)[:6]
+    for robot in (n for n, h in sim.entities.items() if h.kind == "robot"):
+        joints += [j.name for j in sim.entities.urdf(robot).movable_joints][:6]
+        parts += list(sim.entities.urdf(robot).links)[:6]
     floats = [0.0, 1.0, -1.0, 0.5, 3.0, -1e-9, 1e6, -1e308, 1e308, math.nan, math.inf, -math.inf]
     return {"names": names + hostile, "parts": parts + hostile, "joints": joints + hostile,
             str: names + parts + joints + hostile, float: floats, int: [0, 1, -1, 7, 2**31 - 1, -(2**31)],
@@ -68,7 +68,7 @@ def test_hostile_api_requests_are_answered_without_tracebacks(backend: str,
     answered = 0
     with caplog.at_level(logging.WARNING, logger="sigcore"):
         for entry in entries:
-            agents = [a for a, h in sim.agents.items() if h.kind in entry.kinds]
+            agents = [a for a, h in sim.entities.items() if h.kind in entry.kinds]
             for _ in range(REQUESTS_PER_ENTRY):
                 agent = rng.choice(agents)
                 result: Any = call(sim, entry, agent, _request(rng, entry.request, pools))

@@ -82,14 +82,14 @@ def test_a_spawned_robot_brings_its_camera_and_a_deleted_one_takes_it(sim: Simul
     """A second robot spawned with a camera is captured under its own prefixed optical frame and its topics are
     declared; deleting it withdraws them and its camera is gone."""
     robot = sim.world.agent("bot").model_copy(update={"name": "bot2"})
-    sim.add_entities([robot])
+    sim.entities.add([robot])
     topics = {p.topic for p in sim.publications.declared}
     assert {"/bot2/head/image_raw", "/bot2/head/depth/image_raw", "/bot2/head/camera_info"} <= topics
     out = call(sim, ENTRIES["_captureView"], "bot2", {"camera": "head"})
     assert out["success"], out["message"]
     assert out["image"]["header"]["frame_id"] == "bot2/head_optical_frame"
     assert "bot2/head_optical_frame" in sim.frames.static()
-    sim.delete(["bot2"])
+    sim.entities.delete(["bot2"])
     assert not any(p.topic.startswith("/bot2/") for p in sim.publications.declared)
     assert "bot2/head_optical_frame" not in sim.frames.static()
     assert not call(sim, ENTRIES["_captureView"], "bot2", {"camera": "head"})["success"]

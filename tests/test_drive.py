@@ -17,13 +17,13 @@ SET_WHEEL = next(e for e in api_table() if e.suffix == "_setWheel")
 
 def test_set_wheel_replaces_the_geometry_until_reset(sim: Simulation) -> None:
     """_setWheel changes the geometry the simulation reports; Simulation.reset() restores the world file's."""
-    assert sim.wheels("bot") == (0.1, 0.36)
+    assert sim.entities.drive("bot").geometry() == (0.1, 0.36)
     r = call(sim, SET_WHEEL, "bot", {"wheel_radius": 0.2, "wheel_distance": 0.5})
     assert r["success"], r["message"]
-    assert sim.wheels("bot") == (0.2, 0.5) == sim.robot("bot").wheel_geometry()
-    assert sim.drive("bot").model.radius == 0.1  # the world file's <drive> is unchanged
+    assert sim.entities.drive("bot").geometry() == (0.2, 0.5) == sim.robot("bot").wheel_geometry()
+    assert sim.entities.drive("bot").model.radius == 0.1  # the world file's <drive> is unchanged
     sim.reset()
-    assert sim.wheels("bot") == (0.1, 0.36)
+    assert sim.entities.drive("bot").geometry() == (0.1, 0.36)
 
 
 @pytest.mark.parametrize(("radius", "distance", "says"), [
@@ -39,7 +39,7 @@ def test_set_wheel_refuses_bad_values(sim: Simulation, radius: float, distance: 
     """A non-finite, non-positive or too large value is refused with what is valid, and nothing changes."""
     r = call(sim, SET_WHEEL, "bot", {"wheel_radius": radius, "wheel_distance": distance})
     assert not r["success"] and says in r["message"]
-    assert sim.wheels("bot") == (0.1, 0.36)
+    assert sim.entities.drive("bot").geometry() == (0.1, 0.36)
 
 
 def test_set_wheel_on_an_object_is_refused(sim: Simulation) -> None:
@@ -64,7 +64,7 @@ def test_odometry_uses_the_geometry_set(sim: Simulation) -> None:
     """With the radius declared twice the URDF's, the odometry counts twice the distance the body drives; after a
     reset it matches the body again (within 5 %: spin-up and slip)."""
     bot = sim.robot("bot")
-    odo = sim.enable_odometry("bot")
+    odo = sim.entities.enable_odometry("bot")
     bot.set_wheel(0.2, 0.36)
     x0 = bot.position()[0]
     bot.set_wheel_velocity(3.0, 3.0)

@@ -19,7 +19,7 @@ from sigcore.feature import Feature, FeatureConfig
 from sigcore.publish import Publication, PublicationSink
 from sigcore.sim import Simulation
 from sigcore.sim.events import CHANNELS, Channel, Events, Reset, Subscription
-from sigcore.sim.feature_guard import FeatureOwner
+from sigcore.sim.features import FeatureOwner
 from sigcore.world import parse_world
 from sigcore.world.resources import SpawnRequest
 
@@ -209,7 +209,7 @@ def provoke(sim: Simulation, channel: str) -> None:
         sim.step(150)  # the ball lands within 0.2 s; the lidar and the camera are due at step 50
         sim.cameras.settle()
     elif channel in ("entities", "scene"):
-        [name] = sim.spawn([SpawnRequest(resource='<object shape="box" size="0.1 0.1 0.1" pose="0 2 0.05"/>',
+        [name] = sim.entities.spawn([SpawnRequest(resource='<object shape="box" size="0.1 0.1 0.1" pose="0 2 0.05"/>',
                                          name="crate", allow_renaming=True)])
         assert isinstance(name, str)
     elif channel == "reset":
@@ -219,7 +219,7 @@ def provoke(sim: Simulation, channel: str) -> None:
     elif channel == "control":
         sim.control.pause()
     elif channel == "world":
-        sim.unload_world()
+        sim.worlds.unload()
 
 
 @pytest.mark.parametrize("channel", CHANNELS)
@@ -230,7 +230,7 @@ def test_a_feature_raising_on_any_channel_is_disabled_and_detached_from_every_ch
     sim = grumpy_sim(tmp_path, channel)
     feature = sim.features["grumpy"]
     assert isinstance(feature, Grumpy)
-    guard = sim.feature_guard  # the world's (an unload replaces it)
+    guard = sim.features  # the world's (an unload replaces it)
     assert {s.channel for s in sim.events.subscriptions(owner=FeatureOwner("grumpy"))} == set(CHANNELS)
     provoke(sim, channel)
     assert feature.seen[channel] >= 1
@@ -254,9 +254,9 @@ def test_a_world_unload_detaches_what_its_features_and_parts_subscribed(grumpy: 
     world_s = [s for s in sim.events.subscriptions() if s is not mine]
     assert {s.channel for s in world_s} >= {"scan", "scene", "message", "collision"}
     assert {str(s.owner) for s in world_s} == {"FeatureOwner(name='grumpy')", "<the world's parts>"}
-    sim.unload_world()
+    sim.worlds.unload()
     assert not any(s.active for s in world_s) and mine.active
-    sim.load_world(parse_world(DATA / "world.xml"))
+    sim.worlds.load(parse_world(DATA / "world.xml"))
     assert mine.active and mine in sim.events.subscriptions("step")
     assert sim.events.subscriptions("scene")  # the new world's description topics
 

@@ -121,13 +121,13 @@ def test_feature_and_greeters_run(hello: Any, tmp_path: Path) -> None:
     """Greeters greet each other at start and count messages; the feature counts steps, greets each period."""
     sim = world_sim(tmp_path, 'greeting="hi" period="0.1"')
     sim.step(50)  # 0.5 s
-    assert sim.summary() == {"hello": {"greeting": "hi", "steps": 50, "greetings": 5}}
-    alice = sim.dispatch.controller("alice")
+    assert sim.features.summary() == {"hello": {"greeting": "hi", "steps": 50, "greetings": 5}}
+    alice = sim.entities.controllers.controller("alice")
     assert isinstance(alice, hello.Greeter)
     # bob's greeting, then the feature's at 0.1 .. 0.4 s (the one at 0.5 s is delivered before step 51)
     assert (alice.received, alice.last) == (5, "hi")
     assert alice.actions == 2  # on_action at 0 s and 0.5 s
-    assert sim.dispatch.failures == []
+    assert sim.entities.controllers.failures == []
 
 
 @pytest.mark.parametrize(("attributes", "column", "message"), [
@@ -158,6 +158,6 @@ def test_greeter_alone_in_python(hello: Any, tmp_path: Path) -> None:
     sim = Simulation(parse_world(path), NullBackend())
     sim.step(10)
     for me, other in (("alice", "bob"), ("bob", "alice")):
-        greeter = sim.dispatch.controller(me)
+        greeter = sim.entities.controllers.controller(me)
         assert isinstance(greeter, hello.Greeter)
         assert (greeter.received, greeter.last) == (1, f"hello from {other}")

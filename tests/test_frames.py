@@ -30,7 +30,7 @@ def _parents(sim: Simulation, robot: str) -> dict[str, tuple[str, np.ndarray, np
     dynamic = sim.frames.transforms(robot) + sim.frames.entity_transforms()
     if sim.frames.root_mode(robot) == "odom":
         pos, quat = sim.backend.get_pose(robot)
-        dynamic.append((WORLD, sim.urdf(robot).root, tuple(pos), tuple(quat)))
+        dynamic.append((WORLD, sim.entities.urdf(robot).root, tuple(pos), tuple(quat)))
         del tree["odom"]  # world -> odom -> base_link replaced by world -> base_link
     for parent, child, xyz, wxyz in dynamic:
         assert child not in tree, f"frame '{child}' has two parents"
@@ -52,7 +52,7 @@ def _in_world(tree: dict[str, tuple[str, np.ndarray, np.ndarray]], frame: str) -
 def _move_joints(sim: Simulation, robot: str) -> None:
     """Every movable joint to a non-zero position inside its limits."""
     rng = np.random.default_rng(7)
-    for joint in sim.urdf(robot).movable_joints:
+    for joint in sim.entities.urdf(robot).movable_joints:
         low, high = (joint.lower, joint.upper) if joint.lower is not None and joint.upper is not None else (-2, 2)
         value = float(rng.uniform(0.3, 0.9)) * (high if abs(high) >= abs(low) else low)
         assert value != 0.0
@@ -69,7 +69,7 @@ def test_composed_link_poses_equal_the_backend_poses(world: str, backend: str) -
     _move_joints(sim, robot)
     tree = _parents(sim, robot)
     assert {parent for parent, _, _ in tree.values()} - set(tree) == {WORLD}  # one root
-    for link in sim.urdf(robot).links:
+    for link in sim.entities.urdf(robot).links:
         pos, quat = _in_world(tree, link)
         bpos, bquat = sim.backend.get_pose(robot, link)  # every link has a body on both backends (none merged)
         assert np.abs(pos - bpos).max() < 1e-6, link
@@ -99,7 +99,7 @@ def test_the_roots_of_robots_with_a_drive_fixed_and_free() -> None:
 def test_transforms_take_the_published_joint_positions() -> None:
     """Given the joint positions of joint_states, the transforms use them instead of reading the backend."""
     sim = Simulation(parse_world(WORLDS["cleanup"]), "mujoco")
-    joints = sim.urdf("robot_000").movable_joints
+    joints = sim.entities.urdf("robot_000").movable_joints
     positions = [0.25 * (i % 3) for i in range(len(joints))]
     for j, value in zip(joints, positions, strict=True):
         sim.backend.set_joint_angle("robot_000", j.name, value)

@@ -329,7 +329,7 @@ def test_set_owner_recorded_and_validated(sim: Simulation) -> None:
 
     entry = next(e for e in api_table() if e.suffix == "_setOwner")
     assert call(sim, entry, "moderator", {"name": "cube", "part": "main", "owner": "bot"})["success"]
-    assert sim.owners.get("cube", "main") == sim.agent("cube").owner() == "bot"
+    assert sim.entities.owners.get("cube", "main") == sim.agent("cube").owner() == "bot"
     r = call(sim, entry, "moderator", {"name": "cube", "part": "main", "owner": "nobody"})
     assert not r["success"] and "no agent 'nobody'" in r["message"]
     sim.reset()

@@ -91,11 +91,12 @@ def test_reset_restores_the_world_files_values(infos: EntityInfos) -> None:
 
 
 def test_simulation_owns_the_information_and_its_reset_restores_it(sim: Simulation) -> None:
-    """sim.info starts from the world file and Simulation.reset restores it."""
-    assert sim.info.get("cube").tags == ("trash",) and sim.info.get("wall").category == "static_object"
-    sim.info.set("cube", "object", "moved to the bin", ["done"])
+    """sim.entities.info starts from the world file and Simulation.reset restores it."""
+    info = sim.entities.info
+    assert info.get("cube").tags == ("trash",) and info.get("wall").category == "static_object"
+    sim.entities.info.set("cube", "object", "moved to the bin", ["done"])
     sim.reset()
-    assert sim.info.get("cube") == EntityInfo("object", "", ("trash",))
+    assert sim.entities.info.get("cube") == EntityInfo("object", "", ("trash",))
 
 
 def test_categories_name_the_standard_constants() -> None:

@@ -89,7 +89,7 @@ class Flaky(Feature):
             sys.exit(5)
         sim.events.subscribe("step", self._on_step)
         sim.events.subscribe("message", self._on_message)
-        sim.register_service("flaky_service", self._on_service)
+        sim.features.register_service("flaky_service", self._on_service)
 
     def _on_step(self, sim):
         self.steps += 1
@@ -385,7 +385,7 @@ def test_failed_feature_is_detached_and_in_the_run_report(flaky: ModuleType, tmp
     assert feature.steps == 20
     sim.send_msg("moderator", "moderator", "hi")
     sim.step(5)
-    assert feature.steps == 20 and feature.messages == 0 and "flaky_service" not in sim.services
+    assert feature.steps == 20 and feature.messages == 0 and "flaky_service" not in sim.features.services
 
 
 def test_feature_failing_in_a_message_observer_or_reset_is_disabled_once(flaky: ModuleType, tmp_path: Path) -> None:
@@ -396,7 +396,7 @@ def test_feature_failing_in_a_message_observer_or_reset_is_disabled_once(flaky: 
     sim.send_msg("moderator", "moderator", "hi")
     sim.step(3)
     sim.reset()
-    assert [(f.where, f.error) for f in sim.feature_guard.failures] == [("message observer", "KeyError: 'hi'")]
+    assert [(f.where, f.error) for f in sim.features.failures] == [("message observer", "KeyError: 'hi'")]
     assert feature.steps == 0 and feature.resets == 0  # the failure was before the first step's observers
     sim = flaky_sim(tmp_path, 'fail="reset"')
     feature = sim.features["flaky"]
@@ -404,7 +404,7 @@ def test_feature_failing_in_a_message_observer_or_reset_is_disabled_once(flaky: 
     sim.reset()
     sim.reset()
     sim.step(2)
-    assert [(f.where, f.error) for f in sim.feature_guard.failures] == [("reset", "ValueError: cannot reset")]
+    assert [(f.where, f.error) for f in sim.features.failures] == [("reset", "ValueError: cannot reset")]
     assert feature.resets == 1 and feature.steps == 2
 
 

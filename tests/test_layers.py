@@ -126,7 +126,7 @@ def test_the_cycle_finder_finds_a_cycle() -> None:
 
 def test_the_graph_sees_imports_inside_functions() -> None:
     """The simulation imports the spawnables catalogue only inside a method: the graph has that edge."""
-    assert "sigcore.world.spawnables" in import_graph()["sigcore.sim.simulation"]
+    assert "sigcore.world.spawnables" in import_graph()["sigcore.sim.population"]
 
 
 def test_the_world_layer_imports_nothing_above_it() -> None:

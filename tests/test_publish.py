@@ -103,9 +103,9 @@ def test_agent_publications_come_from_the_api_table() -> None:
     sim = Simulation(parse_world(ROOT / "worlds" / "cleanup.xml"), "mujoco")
     topics = {p.topic: p for p in sim.publications.declared}
     for entry in (e for e in api_table() if e.direction == "publish"):
-        for agent, handle in sim.agents.items():
+        for agent, handle in sim.entities.items():
             expected = handle.kind in entry.kinds and (entry.suffix != "_scan" or any(
-                lidar.robot == agent for lidar in sim.lidars))
+                lidar.robot == agent for lidar in sim.entities.lidars))
             assert (entry.name_for(agent) in topics) == expected, (entry.suffix, agent)
     scan = topics["robot_000_scan"]
     assert (scan.msg_type, scan.qos, scan.agent) == ("sensor_msgs/msg/LaserScan", "sensor", "robot_000")

@@ -69,7 +69,7 @@ def test_stop_keeps_the_first_reason_and_rearm_forgets_it() -> None:
 
 def test_without_a_world_play_step_and_reset_are_refused_naming_load_world(sim: Simulation) -> None:
     """No world loaded: play, step and reset are refused with a message saying to load one; pause is allowed."""
-    sim.unload_world()
+    sim.worlds.unload()
     c = sim.control
     for verb, call in (("play", c.play), ("step", lambda: c.step(1)), ("reset", c.request_reset)):
         with pytest.raises(RunStateError, match=rf"no world is loaded: nothing to {verb}; load one first"):
@@ -82,7 +82,7 @@ def test_reset_is_done_at_once_and_keeps_the_run_state(sim: Simulation) -> None:
     """request_reset restores the world now (the ball back where it started), keeps paused, pending steps and pace,
     and time goes on."""
     start = sim.backend.get_pose("ball")[0].copy()
-    sim.agents["ball"].set_position([0.5, 0.5, 1.0])
+    sim.entities["ball"].set_position([0.5, 0.5, 1.0])
     sim.step(10)
     c = sim.control
     c.set_pace(2.0)

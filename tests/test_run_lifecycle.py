@@ -256,7 +256,7 @@ def test_simulation_fires_world_events_without_the_runner(recorder: Recorder, co
     sim.stop()
     assert recorder.calls == [("world_loaded", "coretest")], "stop() before any step fires nothing"
     tracker = trackers.Tracker()
-    sim.set_controller("moderator", tracker)
+    sim.entities.set_controller("moderator", tracker)
     trackers.CALLS.clear()
     sim.step(3)
     sim.step(2)

@@ -100,7 +100,7 @@ def test_robot_visuals_come_from_the_urdf_in_link_frames(cleanup_sim: Simulation
     wheel = next(v for v in robot.visuals if v.frame == "wheel_l_link")
     assert wheel.shape == "cylinder" and wheel.size == (0.1, 0.02) and wheel.color == (0.15, 0.15, 0.15, 1.0)
     assert wheel.wxyz == pytest.approx((math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0, 0.0), abs=1e-9)
-    links = set(cleanup_sim.urdf("robot_000").links)
+    links = set(cleanup_sim.entities.urdf("robot_000").links)
     assert {v.frame for v in robot.visuals} <= links
 
 

@@ -17,7 +17,7 @@ def test_lifecycle_order_and_periods(sim: Simulation) -> None:
     """on_init runs once before any on_action; on_action then runs every returned period, at those times."""
     trackers.CALLS.clear()
     tracker = trackers.Tracker()
-    sim.set_controller("moderator", tracker)
+    sim.entities.set_controller("moderator", tracker)
     sim.step(round(0.55 / sim.dt))
     calls = [(c, round(t, 6)) for a, c, t in trackers.CALLS if a == "moderator"]
     assert calls[0] == ("on_init", 0.0)
@@ -29,9 +29,9 @@ def test_lifecycle_order_and_periods(sim: Simulation) -> None:
 def test_only_overridden_callbacks_are_registered(sim: Simulation) -> None:
     """A controller overriding only on_action is never registered for collisions or messages."""
     ctrl = trackers.ActionOnly()
-    sim.set_controller("cube", ctrl)
-    assert "cube" not in sim.dispatch.collision_listeners
-    assert "cube" not in sim.dispatch.message_listeners
+    sim.entities.set_controller("cube", ctrl)
+    assert "cube" not in sim.entities.controllers.collision_listeners
+    assert "cube" not in sim.entities.controllers.message_listeners
     sim.step(round(0.2 / sim.dt))
     assert ctrl.count == 5  # t = 0, 0.05, 0.10, 0.15, 0.20
 
@@ -39,30 +39,30 @@ def test_only_overridden_callbacks_are_registered(sim: Simulation) -> None:
 def test_raising_controller_is_disabled_and_reported(sim: Simulation, caplog: pytest.LogCaptureFixture) -> None:
     """A controller that raises is disabled with its agent's name; the others and the simulation go on."""
     bad, good = trackers.Raising(), trackers.ActionOnly()
-    sim.set_controller("ball", bad)
-    sim.set_controller("heavy", good)
+    sim.entities.set_controller("ball", bad)
+    sim.entities.set_controller("heavy", good)
     with caplog.at_level(logging.ERROR, logger="sigcore"):
         sim.step(100)
     assert bad.count == 3
     assert good.count > 3
-    assert [f.agent for f in sim.dispatch.failures] == ["ball"]
-    assert "RuntimeError: boom" in sim.dispatch.failures[0].error
+    assert [f.agent for f in sim.entities.controllers.failures] == ["ball"]
+    assert "RuntimeError: boom" in sim.entities.controllers.failures[0].error
     assert "'ball'" in caplog.text
     assert sim.step_count == 100
 
 
 def test_bad_period_disables_controller(sim: Simulation) -> None:
     """on_action returning a non-number is reported as a failure of that controller."""
-    sim.set_controller("ball", trackers.BadPeriod())
+    sim.entities.set_controller("ball", trackers.BadPeriod())
     sim.step(5)
-    assert sim.dispatch.failures and "on_action must return" in sim.dispatch.failures[0].error
+    assert sim.entities.controllers.failures and "on_action must return" in sim.entities.controllers.failures[0].error
 
 
 def test_collision_event_once_per_new_contact(sim: Simulation) -> None:
     """Dropping the ball onto the heavy box gives one event per new (part, other entity) pair, with both names."""
     tracker = trackers.Tracker()
     tracker.period = 100.0
-    sim.set_controller("ball", tracker)
+    sim.entities.set_controller("ball", tracker)
     sim.step(10)
     tracker.events.clear()
     heavy = sim.agent("heavy").position()
@@ -77,15 +77,15 @@ def test_collision_event_once_per_new_contact(sim: Simulation) -> None:
 def test_messages_reach_on_recv_msg(sim: Simulation) -> None:
     """send_msg reaches the recipient before the next step; broadcast_msg reaches every other agent."""
     receiver, other = trackers.Tracker(), trackers.Tracker()
-    sim.set_controller("moderator", receiver)
-    sim.set_controller("ball", other)
-    sim.set_controller("bot", trackers.Greeter())
+    sim.entities.set_controller("moderator", receiver)
+    sim.entities.set_controller("ball", other)
+    sim.entities.set_controller("bot", trackers.Greeter())
     seen = []
     sim.events.subscribe("message", seen.append)
     sim.step(1)
     assert [(m.sender, m.content) for m in receiver.messages] == [("bot", "hello moderator"), ("bot", "hello all")]
     assert [m.content for m in other.messages] == ["hello all"]
-    assert len(seen) == len(sim.agents) - 1 + 1
+    assert len(seen) == len(sim.entities) - 1 + 1
 
 
 def test_world_controller_by_dotted_path(core_world: World, tmp_path) -> None:  # type: ignore[no-untyped-def]
@@ -185,7 +185,7 @@ def test_lidar_scans_at_its_rate(sim: Simulation) -> None:
 
 def test_wheel_odometry_follows_the_drive(sim: Simulation) -> None:
     """Wheel odometry integrated each step ends within 3 cm / 0.05 rad of the true displacement after an arc."""
-    odo = sim.enable_odometry("bot")
+    odo = sim.entities.enable_odometry("bot")
     bot = sim.robot("bot")
     p0 = bot.position().copy()
     bot.set_base_velocity(0.3, 0.4)

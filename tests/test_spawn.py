@@ -44,7 +44,7 @@ def sim(request: pytest.FixtureRequest, tmp_path: Path) -> Simulation:
 
 
 def _one(sim: Simulation, **kw: object) -> str:
-    [result] = sim.spawn([SpawnRequest(**kw)])  # type: ignore[arg-type]
+    [result] = sim.entities.spawn([SpawnRequest(**kw)])  # type: ignore[arg-type]
     assert isinstance(result, str), result
     return result
 
@@ -56,9 +56,9 @@ def test_spawned_box_falls_rests_and_is_everywhere(sim: Simulation) -> None:
     sim.events.subscribe("entities", changes.append)
     name = _one(sim, name="box_a", resource=BOX, xyz=(1.0, 1.0, 0.5))
     assert name == "box_a" and changes == [EntityChange(added=("box_a",))]
-    assert "box_a" in sim.agents and "box_a" in sim.entity_names and sim.spawned == {"box_a": ""}
+    assert "box_a" in sim.entities and "box_a" in sim.entities.names and sim.entities.spawned == {"box_a": ""}
     assert "box_a" in sim.scene.entities and "box_a" in sim.frames.entities
-    assert sim.info.get("box_a").tags == ("trash", "can")
+    assert sim.entities.info.get("box_a").tags == ("trash", "can")
     assert any(p.topic == "box_a_onRecvMsg" for p in sim.publications.declared)
     sim.step(750)
     pos, _ = sim.backend.get_pose("box_a")
@@ -83,8 +83,8 @@ def test_spawned_robot_is_a_full_agent(sim: Simulation) -> None:
     element = SIGBOT_ELEMENT.replace("<robot ", '<robot controller="trackers:Tracker" ')
     name = _one(sim, name="robot_001", resource=element, xyz=(0.0, 2.0, 0.3))
     robot = sim.robot(name)
-    assert sim.drive(name).geometry() == (0.1, 0.4)
-    assert [lidar.robot for lidar in sim.lidars] == ["robot_001"]
+    assert sim.entities.drive(name).geometry() == (0.1, 0.4)
+    assert [lidar.robot for lidar in sim.entities.lidars] == ["robot_001"]
     assert sim.frames.prefix("robot_001") == "robot_001/"  # robot_000 keeps its unprefixed frames
     assert sim.frames.prefix("robot_000") == ""
     assert sim.frames.static()["robot_001/odom"][0] == "world"
@@ -106,13 +106,13 @@ def test_delete_releases_grasp_and_forgets_everything(sim: Simulation) -> None:
     hand = sim.backend.get_pose("robot_000", "l_hand_link")[0]
     sim.backend.set_pose("cube", hand)
     robot.grasp("l_hand_link", "cube")
-    assert sim.grasps.held_by("cube") is not None
+    assert sim.entities.grasps.held_by("cube") is not None
     changes: list[EntityChange] = []
     sim.events.subscribe("entities", changes.append)
-    sim.delete(["cube"])
+    sim.entities.delete(["cube"])
     assert changes == [EntityChange(removed=("cube",))]
-    assert sim.grasps.items() == []
-    for view in (sim.agents, sim.entity_names, sim.scene.entities, sim.frames.entities, sim.graspable):
+    assert sim.entities.grasps.items() == []
+    for view in (sim.entities, sim.entities.names, sim.scene.entities, sim.frames.entities, sim.entities.graspable):
         assert "cube" not in view
     assert not any(p.agent == "cube" for p in sim.publications.declared)
     with pytest.raises(ApiError):
@@ -124,7 +124,7 @@ def test_deleting_a_support_lets_things_fall(sim: Simulation) -> None:
     """Deleting a static table lets the plate that rested on it fall to the floor."""
     sim.step(100)
     assert sim.backend.get_pose("plate")[0][2] == pytest.approx(0.42, abs=0.01)
-    sim.delete(["table"])
+    sim.entities.delete(["table"])
     sim.step(600)
     assert sim.backend.get_pose("plate")[0][2] == pytest.approx(0.02, abs=0.01)
 
@@ -157,13 +157,13 @@ def test_refusals_name_the_problem(sim: Simulation, tmp_path: Path) -> None:
         (SpawnRequest(name="x", resource='<object shape="box" size="0.1 0.1"/>'), "RESOURCE_PARSE_ERROR", "size"),
     ]
     before = sim.poses()
-    names = list(sim.agents)
-    results = sim.spawn([request for request, _, _ in cases])
+    names = list(sim.entities)
+    results = sim.entities.spawn([request for request, _, _ in cases])
     for (request, code, word), result in zip(cases, results, strict=True):
         assert isinstance(result, SpawnRefusal), request
         assert result.code == code, (request, str(result))
         assert word in str(result), (request, str(result))
-    assert list(sim.agents) == names
+    assert list(sim.entities) == names
     after = sim.poses()
     assert all(np.array_equal(before[n][0], after[n][0]) for n in before)
     sim.step(10)
@@ -171,12 +171,12 @@ def test_refusals_name_the_problem(sim: Simulation, tmp_path: Path) -> None:
 
 def test_renaming_and_batches(sim: Simulation) -> None:
     """allow_renaming picks a free name; valid requests of a batch are spawned even when others are refused."""
-    results = sim.spawn([SpawnRequest(name="cube", resource=BOX, allow_renaming=True, xyz=(3.0, 3.0, 0.1)),
+    results = sim.entities.spawn([SpawnRequest(name="cube", resource=BOX, allow_renaming=True, xyz=(3.0, 3.0, 0.1)),
                          SpawnRequest(name="cube", resource=BOX, allow_renaming=True, xyz=(3.5, 3.0, 0.1)),
                          SpawnRequest(name="cube", resource=BOX, xyz=(4.0, 3.0, 0.1))])
     assert results[:2] == ["cube_1", "cube_2"]
     assert isinstance(results[2], SpawnRefusal) and results[2].code == "NAME_NOT_UNIQUE"
-    assert {"cube_1", "cube_2"} <= set(sim.agents)
+    assert {"cube_1", "cube_2"} <= set(sim.entities)
 
 
 def test_pose_relative_to_an_entity(sim: Simulation) -> None:
@@ -191,11 +191,11 @@ def test_reset_despawns_and_restores(sim: Simulation) -> None:
     _one(sim, name="extra", resource=BOX, xyz=(1.0, -1.0, 0.3))
     sim.step(50)
     sim.reset(despawn=False)
-    assert "extra" in sim.agents
+    assert "extra" in sim.entities
     assert sim.backend.get_pose("extra")[0] == pytest.approx([1.0, -1.0, 0.3], abs=1e-6)
-    sim.delete(["plate"])
+    sim.entities.delete(["plate"])
     sim.reset()
-    assert "extra" not in sim.agents and "plate" in sim.agents and sim.spawned == {}
+    assert "extra" not in sim.entities and "plate" in sim.entities and sim.entities.spawned == {}
     assert sim.backend.get_pose("plate")[0] == pytest.approx([-2.0, 0.0, 0.421], abs=1e-6)
     sim.step(10)
 
@@ -203,5 +203,5 @@ def test_reset_despawns_and_restores(sim: Simulation) -> None:
 def test_delete_unknown_is_refused(sim: Simulation) -> None:
     """Deleting a name that is no entity is NOT_FOUND, listing the entities."""
     with pytest.raises(SpawnRefusal) as info:
-        sim.delete(["ghost"])
+        sim.entities.delete(["ghost"])
     assert info.value.code == "NOT_FOUND" and "cube" in str(info.value)

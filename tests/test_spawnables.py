@@ -80,7 +80,7 @@ def test_every_shipped_spawnable_builds_in_a_world(cleanup: World, tmp_path: Pat
     path.write_text('<world name="all">\n' + "\n".join(lines) + "\n</world>\n")
     sim = Simulation(parse_world(path), "mujoco")
     sim.step(50)
-    assert set(sim.agents) == {f"{name}_0" for name in SHIPPED}
+    assert set(sim.entities) == {f"{name}_0" for name in SHIPPED}
 
 
 def test_sigbot_and_items_match_the_cleanup_world(cleanup: World) -> None:

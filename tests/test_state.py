@@ -23,26 +23,27 @@ def test_grasps_keep_both_directions_consistent() -> None:
 
 
 def test_a_grasp_goes_through_the_simulation_record_and_a_reset_clears_it(sim: Simulation) -> None:
-    """RobotObj.grasp/release change sim.grasps only through its methods; reset forgets grasps, owners and modes."""
+    """RobotObj.grasp/release change sim.entities.grasps only through its methods; reset forgets grasps, owners and
+    modes."""
     bot = sim.robot("bot")
     part = "hand_link"
     hand = sim.backend.get_pose("bot", part)[0]
     sim.agent("cube").set_position(hand)
     bot.grasp(part, "cube")
-    assert sim.grasps.items() == [("bot", part, "cube")] and sim.agent("cube").is_grasped()
+    assert sim.entities.grasps.items() == [("bot", part, "cube")] and sim.agent("cube").is_grasped()
     sim.agent("ball").set_owner("main", "bot")
-    sim.set_mode("heavy", "gravity", False)
-    assert not sim.mode("heavy", "gravity") and sim.modes("heavy")["gravity"] is False
-    sim.modes("heavy")["gravity"] = True  # a copy: changing it changes nothing
-    assert not sim.mode("heavy", "gravity")
+    sim.entities.set_mode("heavy", "gravity", False)
+    assert not sim.entities.mode("heavy", "gravity") and sim.entities.modes("heavy")["gravity"] is False
+    sim.entities.modes("heavy")["gravity"] = True  # a copy: changing it changes nothing
+    assert not sim.entities.mode("heavy", "gravity")
     sim.reset()
-    assert len(sim.grasps) == 0 and not sim.agent("cube").is_grasped()
+    assert len(sim.entities.grasps) == 0 and not sim.agent("cube").is_grasped()
     assert sim.agent("ball").owner() is None
-    assert sim.mode("heavy", "gravity") and not sim.mode("wall", "dynamics")  # the world file's modes
+    assert sim.entities.mode("heavy", "gravity") and not sim.entities.mode("wall", "dynamics")  # the world file's modes
 
 
 def test_an_unknown_mode_is_refused_with_the_valid_ones(sim: Simulation) -> None:
     """A mode name that does not exist names the valid ones and changes nothing."""
     with pytest.raises(ValueError, match="modes: gravity, dynamics, collision"):
-        sim.set_mode("heavy", "magnetism", True)  # type: ignore[arg-type]
-    assert sim.modes("heavy") == {"gravity": True, "dynamics": True, "collision": True}
+        sim.entities.set_mode("heavy", "magnetism", True)  # type: ignore[arg-type]
+    assert sim.entities.modes("heavy") == {"gravity": True, "dynamics": True, "collision": True}

@@ -178,5 +178,5 @@ def test_entities_and_the_simulation_share_one_document_per_file() -> None:
     world = parse_world(CLEANUP)
     assert world.urdf("trashbox_0") is world.urdf("trashbox_2") is world.urdf(Path("models/trashbox/trashbox.urdf"))
     sim = Simulation(world, "mujoco")
-    assert sim.urdf("robot_000") is world.urdf("robot_000").model
-    assert sim.urdf("robot_000").root == "base_link"
+    assert sim.entities.urdf("robot_000") is world.urdf("robot_000").model
+    assert sim.entities.urdf("robot_000").root == "base_link"

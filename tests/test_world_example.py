@@ -56,7 +56,7 @@ def test_example_builds_and_runs(example: World, backend: str) -> None:
     assert set(sim.features) == {"referee", "slam"}
     sim.step(round(1.0 / sim.dt))
     assert sim.time == pytest.approx(1.0)
-    for name in sim.entity_names:
+    for name in sim.entities.names:
         pos, quat = sim.backend.get_pose(name)
         assert np.all(np.isfinite(pos)) and np.all(np.isfinite(quat)), name
     robot = sim.robot("robot_000")

@@ -1,4 +1,4 @@
-"""Worlds at run time through the core: the catalogue (``sigcore.world.catalogue``), ``Simulation.load_world`` and
+"""Worlds at run time through the core: the catalogue (``sigcore.world.catalogue``), ``sim.worlds.load`` and
 ``unload_world`` on both backends, and their refusals."""
 
 from __future__ import annotations
@@ -174,14 +174,14 @@ def test_loaded_world_runs_as_a_fresh_one(backend: str, cleanup: World, arm6: Wo
     Simulation of it (bitwise), and the run's elapsed steps and time go on."""
     sim = Simulation(cleanup, backend)
     sim.step(120)
-    sim.load_world(arm6)
-    assert sim.loaded and sim.world is arm6 and sim.step_count == 0 and sim.control.paused
-    assert sim.entity_names == ["arm_0"] and list(sim.agents) == ["arm_0"] and list(sim.features) == ["ik"]
+    sim.worlds.load(arm6)
+    assert sim.worlds.loaded and sim.world is arm6 and sim.step_count == 0 and sim.control.paused
+    assert list(sim.entities.names) == ["arm_0"] and list(sim.entities) == ["arm_0"] and list(sim.features) == ["ik"]
     sim.step(200)
     fresh = Simulation(arm6, backend)
     fresh.step(200)
     assert np.array_equal(sim.backend.get_pose("arm_0", "tool0")[0], fresh.backend.get_pose("arm_0", "tool0")[0])
-    assert sim.elapsed_steps == 320 and sim.elapsed_time == pytest.approx(0.64, abs=1e-12)
+    assert sim.worlds.elapsed_steps == 320 and sim.worlds.elapsed_time == pytest.approx(0.64, abs=1e-12)
     assert sim.time == pytest.approx(0.4, abs=1e-12)
 
 
@@ -190,14 +190,14 @@ def test_reloading_the_same_world_starts_it_over(backend: str, cleanup: World) -
     """Loading the running world again restores it: trash back in place, spawned entities gone, the referee new."""
     sim = Simulation(cleanup, backend)
     start = sim.poses()
-    [name] = sim.spawn([SpawnRequest(name="extra", resource='<object shape="box" size="0.1 0.1 0.1" mass="1"/>',
-                                     xyz=(0.0, 0.0, 0.5))])
+    [name] = sim.entities.spawn([SpawnRequest(name="extra", xyz=(0.0, 0.0, 0.5),
+                                              resource='<object shape="box" size="0.1 0.1 0.1" mass="1"/>')])
     assert name == "extra"
     sim.agent("can_0").set_position((1.0, 1.0, 1.0))
     sim.step(50)
     old_referee = sim.features["referee"]
-    sim.load_world(cleanup)
-    assert "extra" not in sim.entity_names and sim.spawned == {}
+    sim.worlds.load(cleanup)
+    assert "extra" not in sim.entities.names and sim.entities.spawned == {}
     assert sim.features["referee"] is not old_referee
     assert all(np.array_equal(sim.poses()[n][0], start[n][0]) for n in start)
 
@@ -209,13 +209,13 @@ def test_observers_and_publications_follow_the_world(cleanup: World, arm6: World
     sink = Recorder()
     sim.publications.connect(sink)
     seen: list[tuple[str, str, int]] = []
-    sim.events.subscribe("world", lambda c: seen.append((c.kind, c.world.name, len(sim.entity_names))))
+    sim.events.subscribe("world", lambda c: seen.append((c.kind, c.world.name, len(sim.entities.names))))
     steps: list[int] = []
     sim.events.subscribe("step", lambda s: steps.append(s.step_count))
     old_topics = {p.topic for p in sim.publications.declared}
     sim.step(3)
     sink.events.clear()
-    sim.load_world(arm6)
+    sim.worlds.load(arm6)
     assert seen == [("unloading", "cleanup", len(cleanup.entities)), ("loaded", "arm6", 1)]
     withdrawn = {t for k, t in sink.events if k == "withdraw"}
     declared = {t for k, t in sink.events if k == "declare"}
@@ -237,19 +237,19 @@ def test_unload_leaves_no_world(backend: str, cleanup: World) -> None:
     a world loaded afterwards runs."""
     sim = Simulation(cleanup, backend)
     sim.step(5)
-    sim.unload_world()
-    assert not sim.loaded and sim.entity_names == [] and sim.agents == {} and sim.features == {}
+    sim.worlds.unload()
+    assert not sim.worlds.loaded and list(sim.entities.names) == [] and sim.entities == {} and sim.features == {}
     with pytest.raises(ApiError, match="no world is loaded"):
         sim.step()
-    [refusal] = sim.spawn([SpawnRequest(resource='<object shape="box" size="0.1 0.1 0.1" mass="1"/>')])
+    [refusal] = sim.entities.spawn([SpawnRequest(resource='<object shape="box" size="0.1 0.1 0.1" mass="1"/>')])
     assert isinstance(refusal, SpawnRefusal) and "no world is loaded" in str(refusal)
     with pytest.raises(WorldRefusal) as e:
-        sim.unload_world()
+        sim.worlds.unload()
     assert e.value.code == "NO_WORLD_LOADED"
-    assert [w.name for w in sim.available_worlds()[0]][0] == "cleanup"  # the world the run started with
-    sim.load_world(cleanup)
+    assert [w.name for w in sim.worlds.available()[0]][0] == "cleanup"  # the world the run started with
+    sim.worlds.load(cleanup)
     sim.step(5)
-    assert sim.loaded and sim.step_count == 5 and sim.elapsed_steps == 10
+    assert sim.worlds.loaded and sim.step_count == 5 and sim.worlds.elapsed_steps == 10
 
 
 def test_a_world_that_cannot_be_built_is_refused_before_unloading(cleanup: World, tmp_path: Path) -> None:
@@ -264,9 +264,9 @@ def test_a_world_that_cannot_be_built_is_refused_before_unloading(cleanup: World
         path.write_text(text)
         sim = Simulation(cleanup, "mujoco")
         with pytest.raises(WorldRefusal) as e:
-            sim.load_world(parse_world(path))
+            sim.worlds.load(parse_world(path))
         assert e.value.code == "RESOURCE_PARSE_ERROR" and says in str(e.value) and f"{path}:1:" in str(e.value)
-        assert sim.loaded and sim.world is cleanup and "robot_000" in sim.agents
+        assert sim.worlds.loaded and sim.world is cleanup and "robot_000" in sim.entities
         sim.step(2)
 
 
@@ -284,9 +284,9 @@ class WorldSwitcher(Transport):
     def service(self, timeout: float) -> None:
         sim = self.sim
         assert sim is not None
-        if not self.done and sim.elapsed_steps >= self.at:
+        if not self.done and sim.worlds.elapsed_steps >= self.at:
             self.done = True
-            sim.load_world(self.world)
+            sim.worlds.load(self.world)
             sim.control.play()
 
     def stop(self) -> None:
@@ -349,10 +349,10 @@ def test_a_world_failing_while_being_built_leaves_no_world(cleanup: World, tmp_p
     path.write_text('<world><plugin name="exploding_device"/></world>')
     sim = Simulation(cleanup, "mujoco")
     with pytest.raises(WorldRefusal) as e:
-        sim.load_world(parse_world(path))
+        sim.worlds.load(parse_world(path))
     assert e.value.code == "OPERATION_FAILED" and "exploding_device" in str(e.value)
-    assert "no world is loaded" in str(e.value) and not sim.loaded and sim.entity_names == []
-    sim.load_world(cleanup)
+    assert "no world is loaded" in str(e.value) and not sim.worlds.loaded and list(sim.entities.names) == []
+    sim.worlds.load(cleanup)
     sim.control.play()
     sim.step(3)
-    assert sim.loaded and "robot_000" in sim.agents and "referee" in sim.features
+    assert sim.worlds.loaded and "robot_000" in sim.entities and "referee" in sim.features

@@ -83,7 +83,7 @@ class SimObj:
 
     def entities(self) -> list[str]:
         """Names of every agent of the world (bodies and bare agents)."""
-        return list(self.sim.agents)
+        return list(self.sim.entities)
 
     def get_obj(self, name: str) -> SimObj:
         """Handle of another agent by name."""
@@ -101,7 +101,7 @@ class SimObj:
     def _body(self) -> None:
         if not self._has_body:
             raise ApiError(f"'{self.name}' is a bare agent with no body; name an entity instead "
-                           f"(entities: {', '.join(self.sim.entity_names)})")
+                           f"(entities: {', '.join(self.sim.entities.names)})")
 
     def _part(self, part: str | None) -> str | None:
         self._body()
@@ -113,7 +113,7 @@ class SimObj:
         return part
 
     def _dynamic(self, what: str) -> None:
-        if not self.sim.mode(self.name, "dynamics"):
+        if not self.sim.entities.mode(self.name, "dynamics"):
             raise ApiError(f"{what} needs dynamics on for '{self.name}' (set dynamics mode true first)")
 
     # ------------------------------------------------------------------ pose
@@ -269,32 +269,32 @@ class SimObj:
     def gravity_mode(self) -> bool:
         """Whether gravity acts on the entity."""
         self._body()
-        return self.sim.mode(self.name, "gravity")
+        return self.sim.entities.mode(self.name, "gravity")
 
     def set_gravity_mode(self, enabled: bool) -> None:
         """Switch gravity on or off for this entity."""
         self._body()
-        self.sim.set_mode(self.name, "gravity", bool(enabled))
+        self.sim.entities.set_mode(self.name, "gravity", bool(enabled))
 
     def dynamics_mode(self) -> bool:
         """Whether the entity is simulated (True) or held kinematically (False)."""
         self._body()
-        return self.sim.mode(self.name, "dynamics")
+        return self.sim.entities.mode(self.name, "dynamics")
 
     def set_dynamics_mode(self, enabled: bool) -> None:
         """Simulate the entity (True) or hold it where it is, movable only by set_position/joint angles."""
         self._body()
-        self.sim.set_mode(self.name, "dynamics", bool(enabled))
+        self.sim.entities.set_mode(self.name, "dynamics", bool(enabled))
 
     def collision_enable(self) -> bool:
         """Whether the entity collides."""
         self._body()
-        return self.sim.mode(self.name, "collision")
+        return self.sim.entities.mode(self.name, "collision")
 
     def set_collision_enable(self, enabled: bool) -> None:
         """Switch collisions on or off for this entity."""
         self._body()
-        self.sim.set_mode(self.name, "collision", bool(enabled))
+        self.sim.entities.set_mode(self.name, "collision", bool(enabled))
 
     # ------------------------------------------------------------------ contacts and grasping state
     def collision_state(self, part: str = MAIN) -> bool:
@@ -306,17 +306,17 @@ class SimObj:
     def is_grasped(self) -> bool:
         """Whether a robot holds this entity."""
         self._body()
-        return self.sim.grasps.is_held(self.name)
+        return self.sim.entities.grasps.is_held(self.name)
 
     def set_owner(self, part: str, owner: str) -> None:
         """Record agent ``owner`` as the owner of ``part`` (``"main"`` = main part); informational."""
         resolved = self._part(part) or MAIN
         self.sim.agent(owner)  # must exist
-        self.sim.owners.set(self.name, resolved, owner)
+        self.sim.entities.owners.set(self.name, resolved, owner)
 
     def owner(self, part: str = MAIN) -> str | None:
         """The owner recorded for ``part``, or None."""
-        return self.sim.owners.get(self.name, self._part(part) or MAIN)
+        return self.sim.entities.owners.get(self.name, self._part(part) or MAIN)
 
     # ------------------------------------------------------------------ queries on vectors
     @staticmethod

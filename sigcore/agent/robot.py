@@ -66,7 +66,7 @@ class RobotObj(SimObj):
         n = float(np.linalg.norm(q))
         if n < 1e-9:
             raise ApiError("quaternion must be non-zero, e.g. 1 0 0 0")
-        urdf_joint = self.sim.urdf(self.name).joint(j)
+        urdf_joint = self.sim.entities.urdf(self.name).joint(j)
         if urdf_joint.type == "prismatic":
             raise ApiError(f"joint '{j}' is prismatic; set_joint_quaternion needs a revolute joint")
         axis = np.asarray(urdf_joint.axis, dtype=float)
@@ -98,14 +98,14 @@ class RobotObj(SimObj):
         return self.sim.backend.get_joint_position(self.name, self._joint(joint))
 
     def _check_limits(self, joint: str, angle: float) -> None:
-        uj = self.sim.urdf(self.name).joint(joint)
+        uj = self.sim.entities.urdf(self.name).joint(joint)
         if uj.lower is not None and uj.upper is not None and not uj.lower - 1e-9 <= angle <= uj.upper + 1e-9:
             raise ApiError(f"angle {angle} is outside the limits of '{joint}': [{uj.lower}, {uj.upper}]")
 
     # ------------------------------------------------------------------ differential drive
     def wheel_geometry(self) -> tuple[float, float]:
         """``(radius, separation)`` [m] of the differential drive now in use."""
-        return self.sim.wheels(self.name)
+        return self.sim.entities.drive(self.name).geometry()
 
     def set_wheel(self, radius: float, separation: float) -> None:
         """Set the drive geometry (sig_ros ``setWheel``): wheel ``radius`` and ``separation`` [m].
@@ -117,13 +117,13 @@ class RobotObj(SimObj):
             ApiError: the robot has no ``<drive>``, or a value is not a finite number in ``(0, 5]`` (radius) or
                 ``(0, 20]`` (separation) [m].
         """
-        self.sim.drive(self.name).set_geometry(radius, separation)
+        self.sim.entities.drive(self.name).set_geometry(radius, separation)
 
     def set_wheel_velocity(self, left: float, right: float) -> None:
         """Set the wheel speeds [rad/s]; positive on both drives forward. Speeds beyond the drive's
         ``max_wheel_velocity`` are refused. The wheel joints turn at these speeds whatever the geometry set by
         :meth:`set_wheel`; the odometry turns them into a body velocity with that geometry."""
-        drive = self.sim.drive(self.name)
+        drive = self.sim.entities.drive(self.name)
         lim = drive.max_wheel_velocity
         lv = _num(left, "left wheel velocity [rad/s]", low=-lim, high=lim)
         rv = _num(right, "right wheel velocity [rad/s]", low=-lim, high=lim)
@@ -133,7 +133,7 @@ class RobotObj(SimObj):
     def set_base_velocity(self, linear: float, angular: float) -> None:
         """Drive with a body velocity: ``linear`` [m/s] forward and ``angular`` [rad/s] about z (cmd_vel), turned
         into wheel speeds with the drive geometry now in use (:meth:`set_wheel`)."""
-        drive = self.sim.drive(self.name)
+        drive = self.sim.entities.drive(self.name)
         v = _num(linear, "linear velocity [m/s]")
         w = _num(angular, "angular velocity [rad/s]")
         self.set_wheel_velocity(*drive.wheel_speeds(v, w))
@@ -141,7 +141,7 @@ class RobotObj(SimObj):
     # ------------------------------------------------------------------ grasping
     def grippers(self) -> list[str]:
         """Parts that can grasp."""
-        return [g.part for g in self.sim.robot_model(self.name).grippers]
+        return [g.part for g in self.sim.entities.robot_model(self.name).grippers]
 
     def grasp(self, part: str, obj: str) -> None:
         """Grasp object ``obj`` with gripper ``part``.
@@ -150,7 +150,7 @@ class RobotObj(SimObj):
             GraspError: refused, with SIGVerse's reasons: unknown part or object, part not a gripper, part already
                 grasping, object held by another, object not graspable, object beyond the grasp radius.
         """
-        model = self.sim.robot_model(self.name)
+        model = self.sim.entities.robot_model(self.name)
         grippers = {g.part: g for g in model.grippers}
         if part not in self.sim.backend.parts(self.name):
             raise GraspError(GraspRefusal.UNKNOWN_PART, f"'{self.name}' has no part {quote(part)}; grippers: "
@@ -158,10 +158,10 @@ class RobotObj(SimObj):
         if part not in grippers:
             raise GraspError(GraspRefusal.NOT_A_GRIPPER, f"part {quote(part)} is not a gripper; grippers: "
                              f"{', '.join(grippers) or 'none'}")
-        if obj not in self.sim.entity_names or obj == self.name:
+        if obj not in self.sim.entities.names or obj == self.name:
             raise GraspError(GraspRefusal.UNKNOWN_OBJECT, f"no object {quote(obj)}; graspable objects: "
-                             f"{', '.join(self.sim.graspable) or 'none'}")
-        grasps = self.sim.grasps
+                             f"{', '.join(self.sim.entities.graspable) or 'none'}")
+        grasps = self.sim.entities.grasps
         held = grasps.holding(self.name, part)
         if held is not None:
             raise GraspError(GraspRefusal.ALREADY_GRASPING, f"'{part}' already holds '{held}'; release it first")
@@ -169,9 +169,9 @@ class RobotObj(SimObj):
         if holder_part is not None:
             holder, hpart = holder_part
             raise GraspError(GraspRefusal.HELD_BY_ANOTHER, f"'{obj}' is held by {holder}/{hpart}")
-        if obj not in self.sim.graspable:
+        if obj not in self.sim.entities.graspable:
             raise GraspError(GraspRefusal.NOT_GRASPABLE, f"'{obj}' is not graspable (graspable=\"true\" in the "
-                             f"world file); graspable objects: {', '.join(self.sim.graspable) or 'none'}")
+                             f"world file); graspable objects: {', '.join(self.sim.entities.graspable) or 'none'}")
         hand = self.sim.backend.get_pose(self.name, part)[0]
         target = self.sim.backend.get_com(obj)
         dist = float(np.linalg.norm(target - hand))
@@ -187,14 +187,14 @@ class RobotObj(SimObj):
         if part not in self.grippers():
             raise ApiError(f"part {quote(part)} is not a gripper of '{self.name}'; grippers: "
                            f"{', '.join(self.grippers()) or 'none'}")
-        obj = self.sim.grasps.release(self.name, part)
+        obj = self.sim.entities.grasps.release(self.name, part)
         if obj is not None:
             self.sim.backend.detach(self.name, part, obj)
         return obj
 
     def gripper_for_arm(self, arm: str) -> str:
         """Gripper part for a sig_ros ``arm`` value: a gripper part name, or ``left``/``right`` (by ``side``)."""
-        grippers = self.sim.robot_model(self.name).grippers
+        grippers = self.sim.entities.robot_model(self.name).grippers
         for g in grippers:
             if arm in (g.part, g.side):
                 return g.part

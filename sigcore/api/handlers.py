@@ -130,7 +130,7 @@ def get_time(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
 
 
 def get_entities(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
-    names = list(sim.agents)
+    names = list(sim.entities)
     return {"entities_names": names, "length": len(names)}
 
 
@@ -199,32 +199,33 @@ def service_name(sim: Simulation, name: str) -> str:
     Raises:
         ApiError: no service of that name (the message lists the services), or several that differ only in case.
     """
-    if name in sim.services:
+    if name in sim.features.services:
         return name
-    matches = [s for s in sim.services if s.casefold() == name.casefold()]
+    matches = [s for s in sim.features.services if s.casefold() == name.casefold()]
     if len(matches) == 1:
         return matches[0]
     if matches:
         raise ApiError(f"service name {quote(name)} matches {', '.join(sorted(matches))}, which differ only in case; "
                        "give the exact name")
-    raise ApiError(f"no service {quote(name)}; services: {', '.join(sorted(sim.services)) or 'none'} (names are "
+    services = ', '.join(sorted(sim.features.services)) or 'none'
+    raise ApiError(f"no service {quote(name)}; services: {services} (names are "
                    "compared ignoring case)")
 
 
 def check_service(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
-    return {"connected": service_name(sim, m.service_name) in sim.connections.get(agent, set())}
+    return {"connected": sim.features.connected(agent, service_name(sim, m.service_name))}
 
 
 def connect_to_service(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
-    sim.connections.setdefault(agent, set()).add(service_name(sim, m.service_name))
+    sim.features.connect(agent, service_name(sim, m.service_name))
     return {"connected": True}
 
 
 def send_msg_to_srv(sim: Simulation, agent: str, m: Any) -> dict[str, Any]:
     name = service_name(sim, m.name)
-    if name not in sim.connections.get(agent, set()):
+    if not sim.features.connected(agent, name):
         raise ApiError(f"'{agent}' is not connected to service '{name}'; call {agent}_connect_to_service first")
-    sim.services[name](agent, m.msg)
+    sim.features.services[name](agent, m.msg)
     return {"ok": True}
 
 

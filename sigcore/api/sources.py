@@ -57,7 +57,7 @@ class Scans(Source):
     """``<robot>_scan``: every scan of the robot's lidars, in the lidar link's TF frame."""
 
     def has(self, sim: Simulation, agent: str) -> bool:
-        return any(lidar.robot == agent for lidar in sim.lidars)
+        return any(lidar.robot == agent for lidar in sim.entities.lidars)
 
     def attach(self, sim: Simulation, publishers: dict[str, Publisher]) -> None:
         dt_ns = round(sim.dt * 1e9)

@@ -195,7 +195,7 @@ class Recorder(PublicationSink):
         step; when ``closing``, again if commands were applied since this step's message (a replay compares each
         message where it was written)."""
         sim = self.sim
-        if not self.bag.active or not sim.loaded:
+        if not self.bag.active or not sim.worlds.loaded:
             return
         step = sim.step_count
         if step == self._last_truth and not (closing and self._input_since_truth):
@@ -213,7 +213,7 @@ class Recorder(PublicationSink):
         poses = sim.backend.get_poses(self._frames) if self._frames else None
         self._last_truth = step
         self._input_since_truth = False
-        self.bag.write(topic, sim.stamp_ns, self._tf.pack(sim.stamp_ns, poses))
+        self.bag.write(topic, sim.stamp_ns(), self._tf.pack(sim.stamp_ns(), poses))
 
     # ------------------------------------------------------------------ files
     def _attach_world(self) -> None:
@@ -231,7 +231,7 @@ class Recorder(PublicationSink):
         bag.metadata("sigcore", {"version": __version__, "world": world.name, "world_file": str(source),
                                  "world_attachment": f"world/{rel}", "backend": sim.backend.name,
                                  "timestep": repr(sim.dt), "start_step": str(sim.step_count),
-                                 "controllers": json.dumps(sim.controller_overrides),
+                                 "controllers": json.dumps(sim.worlds.first_controllers),
                                  "seed": "" if world.sample_seed is None else str(world.sample_seed),
                                  "noise_seed": str(world.seed),
                                  "ground_truth": GROUND_TRUTH, "inputs": INPUTS})
@@ -292,7 +292,7 @@ def truth_frames(sim: Simulation) -> tuple[list[tuple[str, str | None]], list[st
     parts: list[tuple[str, str | None]] = []
     names: list[str] = []
     for entity in sim.scene.entities:
-        robot = entity in sim.agents and sim.agents[entity].kind == "robot"
+        robot = entity in sim.entities and sim.entities[entity].kind == "robot"
         for frame, part in sim.scene.frame_parts(entity).items():
             parts.append((entity, part))
             names.append(truth_frame(entity, frame, robot))

@@ -399,5 +399,5 @@ class ReplayCheck:
     def report(self, sim: Simulation) -> tuple[list[str], bool]:
         """The report's lines and whether everything compared was reproduced (the referee's topics are compared
         up to the step the replay reached)."""
-        lines, ok = self.topics.lines(sim.stamp_ns)
+        lines, ok = self.topics.lines(sim.stamp_ns())
         return [*self.truth.summary(), *lines], ok and self.truth.ok

@@ -3,7 +3,7 @@
 from .control import ControlChange, RunControl
 from .dispatch import ControllerFailure, SlowCallbacks
 from .exceptions import FeatureError, RunStateError, SimulationError
-from .feature_guard import FeatureFailure
+from .features import FeatureFailure
 from .lidar import LidarSensor, Scan
 from .runner import RunReport, run
 from .simulation import Simulation

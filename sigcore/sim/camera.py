@@ -239,7 +239,7 @@ class Cameras:
         if self._failed is None:
             try:
                 renderer = self._renderer or self._make_renderer()
-                job = _Job([sensor], [sensor.view(sim.backend)], renderer.snapshot(), sim.step_count, sim.stamp_ns)
+                job = _Job([sensor], [sensor.view(sim.backend)], renderer.snapshot(), sim.step_count, sim.stamp_ns())
             except BackendError as e:
                 self._fail(str(e))
             else:
@@ -286,7 +286,7 @@ class Cameras:
         sim = self._sim
         try:
             renderer = self._renderer or self._make_renderer()
-            job = _Job(due, [s.view(sim.backend) for s in due], renderer.snapshot(), step, sim.stamp_ns)
+            job = _Job(due, [s.view(sim.backend) for s in due], renderer.snapshot(), step, sim.stamp_ns())
         except BackendError as e:
             self._fail(str(e))
             return

@@ -25,7 +25,7 @@ Subscribers of a channel are called in the order they subscribed. Subscribing or
 being delivered takes effect from the next event, except that a subscription detached by a failure is not called
 again, even by the delivery in progress.
 
-The hub lasts as long as the simulation (across :meth:`Simulation.load_world`); what a world's parts subscribed
+The hub lasts as long as the simulation (across ``sim.worlds.load``); what a world's parts subscribed
 (its features, its publication sources, its description topics) is detached when that world is unloaded.
 """
 

@@ -5,7 +5,7 @@ frames are prefixed with ``<robot>/``. Objects and humans are frames named after
 ``world``:
 
 * a robot's root link: ``world -> odom`` (static, its start pose on the ground) and ``odom -> <root>`` (the wheel
-  odometry, ``sim.odometry``, published by the transport) for a robot with a ``<drive>``; ``world -> <root>``
+  odometry, ``sim.entities.odometry``, published by the transport) for a robot with a ``<drive>``; ``world -> <root>``
   static at its pose for a ``fixed="true"`` robot; ``world -> <root>`` from the backend's pose (ground truth,
   :meth:`Frames.transforms`) for any other robot;
 * every fixed joint: ``parent -> child`` from the URDF's joint ``<origin>`` (static);
@@ -114,12 +114,12 @@ class Frames:
 
     def _add_robot(self, robot: str) -> None:
         sim = self._sim
-        model = sim.robot_model(robot)
+        model = sim.entities.robot_model(robot)
         self._mode[robot] = "fixed" if model.fixed else "odom" if model.drive is not None else "free"
         if self._mode[robot] != "free":
             pos, quat = sim.backend.get_pose(robot)
             if self._mode[robot] == "fixed":
-                self.set_static(WORLD, self.name(robot, sim.urdf(robot).root), pos, quat)
+                self.set_static(WORLD, self.name(robot, sim.entities.urdf(robot).root), pos, quat)
             else:
                 self.set_static(WORLD, self.name(robot, "odom"), (pos[0], pos[1], 0.0),
                                 planar_quaternion(quat_yaw(quat)))
@@ -135,11 +135,11 @@ class Frames:
         """Every frame name in use -> what it is (for refusing an entity that would reuse one)."""
         taken = {WORLD: "the root frame of the TF tree"}
         for robot in self._prefix:
-            for link in self._sim.urdf(robot).links:
+            for link in self._sim.entities.urdf(robot).links:
                 taken.setdefault(self.name(robot, link), f"the frame of link '{link}' of robot '{robot}'")
             taken.setdefault(self.name(robot, "odom"), f"the odometry frame of robot '{robot}'")
             taken.setdefault(self.name(robot, "map"), f"the map frame of robot '{robot}' (SLAM)")
-            for camera in self._sim.robot_model(robot).cameras:
+            for camera in self._sim.entities.robot_model(robot).cameras:
                 for frame in (camera.link_frame, camera.optical_frame):
                     taken.setdefault(self.name(robot, frame), f"a frame of camera '{camera.name}' of robot '{robot}'")
         for entity in self._entities:
@@ -171,9 +171,9 @@ class Frames:
         """Entities deleted while running: their frames leave the tree (static part republished)."""
         gone = set(names)
         for robot in [r for r in self._prefix if r in gone]:
-            mine = {self.name(robot, link) for link in self._sim.urdf(robot).links} | {
+            mine = {self.name(robot, link) for link in self._sim.entities.urdf(robot).links} | {
                 self.name(robot, "odom"), self.name(robot, "map")} | {
-                self.name(robot, frame) for camera in self._sim.robot_model(robot).cameras
+                self.name(robot, frame) for camera in self._sim.entities.robot_model(robot).cameras
                 for frame in (camera.link_frame, camera.optical_frame)}
             for child in [c for c in self._static if c in mine]:
                 self._static.pop(child)
@@ -187,7 +187,7 @@ class Frames:
         """``WorldError`` at the name of each object or human whose frame name a robot's frame already has."""
         taken = {WORLD: "the root frame of the TF tree"}
         for robot in robots:
-            for link in self._sim.urdf(robot).links:
+            for link in self._sim.entities.urdf(robot).links:
                 taken.setdefault(self.name(robot, link), f"the frame of link '{link}' of robot '{robot}'")
             taken.setdefault(self.name(robot, "odom"), f"the odometry frame of robot '{robot}'")
             taken.setdefault(self.name(robot, "map"), f"the map frame of robot '{robot}' (SLAM)")
@@ -205,7 +205,7 @@ class Frames:
 
     def _robot_tree(self, robot: str) -> tuple[_Moving, ...]:
         """Put the robot's fixed joints in the static tree; its transforms computed at each publication."""
-        urdf = self._sim.urdf(robot)
+        urdf = self._sim.entities.urdf(robot)
         index = {j.name: i for i, j in enumerate(urdf.movable_joints)}
         moving: list[_Moving] = []
         if self._mode[robot] == "free":
@@ -240,7 +240,7 @@ class Frames:
     def moving(self, robot: str) -> tuple[tuple[str, str], ...]:
         """``(parent, child)`` of each transform :meth:`transforms` computes for ``robot``, in its order: the root
         link of a free robot (``world -> <root>``), then every non-fixed joint in URDF order. Not ``odom ->
-        <root>``: that is the wheel odometry (``sim.odometry``)."""
+        <root>``: that is the wheel odometry (``sim.entities.odometry``)."""
         return tuple((m.parent, m.child) for m in self._moving[robot])
 
     def transforms(self, robot: str, positions: Sequence[float] | None = None) -> list[Transform]:
@@ -257,7 +257,7 @@ class Frames:
         """
         sim = self._sim
         if positions is None:
-            positions = [sim.backend.get_joint_angle(robot, j.name) for j in sim.urdf(robot).movable_joints]
+            positions = [sim.backend.get_joint_angle(robot, j.name) for j in sim.entities.urdf(robot).movable_joints]
         out: list[Transform] = []
         for m in self._moving[robot]:
             if m.kind == "revolute":
@@ -321,7 +321,7 @@ class Frames:
     def publish(self) -> None:
         """Push the static tree on ``/tf_static`` (latched: done at construction and whenever it changes)."""
         assert self._publisher is not None
-        self._publisher.publish(self.static_fields(self._sim.stamp_ns))
+        self._publisher.publish(self.static_fields(self._sim.stamp_ns()))
 
     def _republish(self) -> None:
         if self._publisher is not None:

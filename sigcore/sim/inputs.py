@@ -179,33 +179,33 @@ class Inputs:
 
     def entity_info(self, entity: str, category: str, description: str, tags: Sequence[str],
                     what: str = "") -> EntityInfo:
-        """Replace ``entity``'s category, description and tags (``sim.info``); the information now."""
-        info = self._sim.info.set(entity, category, description, list(tags))
+        """Replace ``entity``'s category, description and tags (``sim.entities.info``); the information now."""
+        info = self._sim.entities.info.set(entity, category, description, list(tags))
         self.note("entity_info", entity=entity, category=info.category, description=info.description,
                   tags=list(info.tags), what=what or f"set_entity_info {entity}")
         return info
 
     def spawn(self, requests: Sequence[SpawnRequest], what: str = "") -> list[str | SpawnRefusal]:
         """:meth:`Simulation.spawn` of ``requests`` (one call), noted with what each gave (refusals included)."""
-        outcomes = self._sim.spawn(requests)
+        outcomes = self._sim.entities.spawn(requests)
         self.note_spawn(requests, outcomes, what or f"spawn ({len(requests)})")
         return outcomes
 
     def delete(self, names: Sequence[str], what: str = "") -> None:
         """:meth:`Simulation.delete` of ``names``; noted when done (a refusal raises and notes nothing)."""
-        self._sim.delete(names)
+        self._sim.entities.delete(names)
         self.note("delete", entities=list(names), what=what or f"delete {', '.join(names)}")
 
     def load_world(self, world: World, uri: str = "", resource_string: str = "") -> None:
-        """:meth:`Simulation.load_world` of ``world`` (named by ``uri`` or given as ``resource_string``); noted
+        """``sim.worlds.load`` of ``world`` (named by ``uri`` or given as ``resource_string``); noted
         first, as it ends what the recording can replay."""
         self.note("world", what=f"load_world {world.name}", uri=uri, resource_string=resource_string)
-        self._sim.load_world(world)
+        self._sim.worlds.load(world)
 
     def unload_world(self) -> None:
-        """:meth:`Simulation.unload_world`; noted first."""
+        """``sim.worlds.unload``; noted first."""
         self.note("world", what="unload_world")
-        self._sim.unload_world()
+        self._sim.worlds.unload()
 
     # ------------------------------------------------------------------ replay
     def apply(self, item: Input) -> tuple[ApiEntry, str, Deferred] | None:
@@ -223,7 +223,7 @@ class Inputs:
             from ..api.call import call
             from ..api.deferred import Deferred
 
-            kind = sim.agents[a["agent"]].kind if a["agent"] in sim.agents else None
+            kind = sim.entities[a["agent"]].kind if a["agent"] in sim.entities else None
             entry = next((e for e in sim.api_entries() if e.suffix == a["entry"] and kind in e.kinds), None)
             if entry is None:
                 raise ReplayError(f"step {item.step}: agent {a['agent']!r} has no API entry {a['entry']!r}")

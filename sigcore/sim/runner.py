@@ -14,7 +14,7 @@ from ..isolation import USER_ERRORS, describe
 from ..transport import Transport
 from .control import RunControl, stop_on_signals
 from .dispatch import ControllerFailure, SlowCallbacks
-from .feature_guard import FeatureFailure
+from .features import FeatureFailure
 from .simulation import Simulation
 from .startgate import StartGate
 
@@ -38,7 +38,7 @@ class RunReport:
             end of its task), ``"error"`` when something that is not user code raised (see ``error``); None when
             it ran to its end.
         feature_failures: Features disabled during the run (or while reporting at its end).
-        slow: Controllers whose callbacks took longer than the callback budget (``sim.dispatch.budget``).
+        slow: Controllers whose callbacks took longer than the callback budget (``sim.entities.controllers.budget``).
         report_lines: The features' report lines (``Feature.report``).
         outcome: The world's verdict (:meth:`Simulation.outcome`): False if a feature says the task failed.
         error: When ``stopped_by`` is ``"error"``: what raised (``Type: message``), from the transport, the
@@ -122,7 +122,8 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
     control.set_pace(realtime_factor)
     transports = [] if transport is None else [transport] if isinstance(transport, Transport) else list(transport)
     target = steps if steps is not None else (round(duration / sim.dt) if duration is not None else None)
-    start_step, start_time = sim.elapsed_steps, sim.elapsed_time  # a world loaded while running starts at step 0
+    worlds = sim.worlds
+    start_step, start_time = worlds.elapsed_steps, worlds.elapsed_time  # a world loaded while running starts at step 0
     with stop_on_signals(control) if handle_signals else nullcontext():
         sim.start()
         try:
@@ -140,13 +141,15 @@ def run(sim: Simulation, *, duration: float | None = None, steps: int | None = N
         finally:
             sim.stop()
     kinds: dict[str, list[str]] = {}
-    for name, handle in sim.agents.items():
+    for name, handle in sim.entities.items():
         kinds.setdefault(handle.kind, []).append(name)
     stopped_by = "error" if error is not None else (control.stop_reason or "request") if control.stopping else None
-    summary, lines, outcome, results = sim.summary(), sim.report_lines(), sim.outcome(), sim.results()
-    return RunReport(kinds, sim.elapsed_steps - start_step, sim.time, wall, list(sim.dispatch.failures), summary,
-                     sim.elapsed_time - start_time, stopped_by, list(sim.feature_guard.failures),
-                     list(sim.dispatch.slow.values()), lines, outcome, error, results)
+    features, controllers = sim.features, sim.entities.controllers
+    summary, lines = features.summary(), features.report_lines()
+    outcome, results = features.outcome(), features.results()
+    return RunReport(kinds, worlds.elapsed_steps - start_step, sim.time, wall, list(controllers.failures), summary,
+                     worlds.elapsed_time - start_time, stopped_by, list(features.failures),
+                     list(controllers.slow.values()), lines, outcome, error, results)
 
 
 class _started:
@@ -187,9 +190,9 @@ def _loop(sim: Simulation, target: int | None, start_step: int, control: RunCont
     next_progress = wall0 + progress_every
     transport = transports[0] if transports else None
     others = transports[1:]
-    while not control.stopping and (target is None or sim.elapsed_steps - start_step < target):
+    while not control.stopping and (target is None or sim.worlds.elapsed_steps - start_step < target):
         if transport is not None:
-            transport.service(0.01 if control.idle or not sim.loaded else 0.0)
+            transport.service(0.01 if control.idle or not sim.worlds.loaded else 0.0)
             for other in others:
                 other.service(0.0)
             if gate is not None and gate.active:
@@ -197,7 +200,7 @@ def _loop(sim: Simulation, target: int | None, start_step: int, control: RunCont
         if control.realtime_factor != realtime_factor:  # a viewer changed the pace: no catching up
             realtime_factor = control.realtime_factor
             pace_time, pace_wall = sim.time, _time.perf_counter()
-        if not sim.loaded:  # unloaded through the transport: wait for a world (the transport loads one)
+        if not sim.worlds.loaded:  # unloaded through the transport: wait for a world (the transport loads one)
             control.hold()
             if transport is None:
                 break

@@ -16,7 +16,7 @@ class EntityChange:
     one per spawn or delete).
 
     Attributes:
-        added: Names of the entities added (each is in ``sim.agents``, ``sim.world``, the backend, the scene...).
+        added: Names of the entities added (each is in ``sim.entities``, ``sim.world``, the backend, the scene...).
         removed: Names of the entities removed (gone from all of them).
     """
 
@@ -31,7 +31,7 @@ class WorldChange:
     Attributes:
         kind: ``unloading``: the old world is still complete (its agents, entities, publications), and everything of
             it goes right after the observers return; ``loaded``: the new world is complete, paused at time 0 (its
-            step count starts again at 0; ``sim.elapsed_steps`` goes on).
+            step count starts again at 0; ``sim.worlds.elapsed_steps`` goes on).
         world: The world unloaded or loaded.
     """
 

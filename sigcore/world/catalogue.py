@@ -1,7 +1,7 @@
 """The worlds a running simulation may load (``load_world``): where they are found and how a request names one.
 
 Sources, in order: the world the run started with, the repository's ``worlds/`` folder, the files and folders given
-on the command line (``sigcore run WORLD --worlds PATH``, :attr:`Simulation.world_sources`), and those plugins
+on the command line (``sigcore run WORLD --worlds PATH``, ``sim.worlds.sources``), and those plugins
 register (``sigcore_register_worlds``). A folder contributes every ``*.xml`` directly in it whose root element is
 ``<world>``; only the root element is read (name, ``description``, ``tags``), so listing is fast and a world with
 errors is still listed (loading it reports them).

@@ -71,8 +71,8 @@ def test_cleanup_scan_matches_mujoco() -> None:
     for name in ("mujoco", "bullet"):
         sim = Simulation(world, name)
         sim.step(50)
-        assert sim.lidars[0].last is not None
-        scans.append(sim.lidars[0].last.ranges)
+        assert sim.entities.lidars[0].last is not None
+        scans.append(sim.entities.lidars[0].last.ranges)
     assert np.isfinite(scans[1]).all()
     np.testing.assert_allclose(scans[1], scans[0], atol=0.01)
 

@@ -80,7 +80,7 @@ def test_wheels_and_casters_on_the_floor_are_no_events(make_world, simulate) -> 
     sim = simulate(make_world(robot()))
     events = _listen(sim)
     bot = sim.robot("bot")
-    assert sim.rolling_parts("bot") == {"wheel_l", "wheel_r", "caster_f", "caster_b"}
+    assert sim.entities.rolling_parts("bot") == {"wheel_l", "wheel_r", "caster_f", "caster_b"}
     for left, right in ((5.0, 5.0), (-5.0, -5.0), (-4.0, 4.0), (6.0, 2.0), (0.0, 0.0)):
         bot.set_wheel_velocity(left, right)
         sim.step(round(0.6 / sim.dt))

@@ -115,7 +115,7 @@ def test_lidar_scan_in_room(make_world, simulate) -> None:
     """The robot's lidar, scanned by the Simulation at its rate, returns the analytic room ranges within 1 cm."""
     sim = simulate(make_world(ROOM + robot(pose="0.3 -0.2 0 0 0 0.5")))
     sim.step(50)  # one scan period at 10 Hz
-    lidar = sim.lidars[0]
+    lidar = sim.entities.lidars[0]
     assert lidar.last is not None
     pos, quat = sim.backend.get_pose("bot", "lidar_link")
     angles = lidar.angle_min + lidar.increment * np.arange(len(lidar.last.ranges))

@@ -154,7 +154,7 @@ def test_services_without_the_feature(core_world) -> None:
     from sigcore_ik.services import entries
 
     sim = Simulation(core_world, "mujoco")
-    robot = next(n for n, h in sim.agents.items() if h.kind == "robot")
+    robot = next(n for n, h in sim.entities.items() if h.kind == "robot")
     for entry in entries():
         res = call_and_wait(sim, entry, robot, {"x": 0.1})
         assert not res["success"] and 'add <plugin name="ik"/>' in res["message"]

@@ -74,7 +74,7 @@ def cleanup(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     connections, messages = _read(path)
     truth = sim.backend.get_poses([(n, None) for n in sim.scene.entities])
     return {"path": path, "report": report, "published": count.stamps, "connections": connections,
-            "messages": messages, "dt_ns": round(sim.dt * 1e9), "end_ns": sim.stamp_ns,
+            "messages": messages, "dt_ns": round(sim.dt * 1e9), "end_ns": sim.stamp_ns(),
             "box": sim.scene.bounds("trashbox_2"), "final": dict(zip(sim.scene.entities, truth, strict=True)),
             "every": recorder._every}
 
@@ -377,14 +377,14 @@ def _spawn_and_record(path: Path, pebble: Path) -> None:
                                      xyz=(-0.96, 1.0, 0.3), wxyz=(0.9659258, 0.0, 0.0, 0.2588190), tags=("trash",)),
                         SpawnRequest(name="crate", uri=str(pebble), xyz=(0.6, 0.5, 0.3), allow_renaming=True),
                         SpawnRequest(uri="missing.urdf")]
-            outcomes = sim.spawn(requests)
+            outcomes = sim.entities.spawn(requests)
             assert outcomes[:2] == ["crate", "crate_1"] and isinstance(outcomes[2], SpawnRefusal), outcomes
             sim.inputs.note_spawn(requests, outcomes, what="spawn_entities (3)")  # as siminterfaces notes it
         if step == 400:
-            sim.delete(["cube"])
+            sim.entities.delete(["cube"])
             sim.inputs.note("delete", entities=["cube"], what="delete_entity cube")
         if step == 500:
-            info = sim.info.set("heavy", "dynamic_object", "pushed around", ["furniture", "moved"])
+            info = sim.entities.info.set("heavy", "dynamic_object", "pushed around", ["furniture", "moved"])
             sim.inputs.note("entity_info", entity="heavy", category=info.category, description=info.description,
                             tags=list(info.tags), what="set_entity_info heavy")
         sim.step()
@@ -426,8 +426,9 @@ def test_a_replay_reproduces_spawns_deletes_and_entity_info(tmp_path: Path) -> N
     sim, replayer = replay(rec.inputs)
     equal, worst, _ = compare(recorded, poses_now(sim))
     assert replayer.error is None and replayer.applied == 3 and equal and worst == 0.0
-    assert sim.info.get("heavy").category == "dynamic_object" and sim.info.get("heavy").tags == ("furniture", "moved")
-    assert sim.info.get("crate").tags == ("trash",)
+    heavy = sim.entities.info.get("heavy")
+    assert heavy.category == "dynamic_object" and heavy.tags == ("furniture", "moved")
+    assert sim.entities.info.get("crate").tags == ("trash",)
 
     sim, _ = replay([i for i in rec.inputs if i.kind != "spawn"])
     now = poses_now(sim)
@@ -457,7 +458,7 @@ def test_replay_refuses_commands_recorded_without_their_arguments() -> None:
             sim.inputs.apply(item)
     assert refusal(Input(7, "delete", {"entities": ["cube"]})) is None
     sim.inputs.apply(Input(7, "delete", {"entities": ["cube"]}))
-    assert "cube" not in sim.entity_names
+    assert "cube" not in sim.entities.names
     with pytest.raises(ReplayError, match="step 7: deleting 'cube' is refused now .NOT_FOUND"):
         sim.inputs.apply(Input(7, "delete", {"entities": ["cube"]}))
 
@@ -472,14 +473,14 @@ def test_a_world_load_is_recorded_in_log_order_and_not_replayed(tmp_path: Path) 
     sim = Simulation(parse_world(WORLD), "mujoco")
     recorder = Recorder(sim, tmp_path / "bag", ground_truth_rate=100)
     sim.step(50)
-    sim.delete(["cube"])
+    sim.entities.delete(["cube"])
     sim.inputs.note("delete", entities=["cube"], what="delete_entity cube")
     sim.step(250)
     camera = ROOT / "tests" / "data" / "sim" / "camera.xml"
     sim.inputs.note("world", what="load_world camera", uri=str(camera), resource_string="")
-    sim.load_world(parse_world(camera))
+    sim.worlds.load(parse_world(camera))
     sim.step(20)
-    info = sim.info.set("can", "dynamic_object", "", [])
+    info = sim.entities.info.set("can", "dynamic_object", "", [])
     sim.inputs.note("entity_info", entity="can", category=info.category, description="", tags=[])
     sim.step(80)
     recorder.close()

@@ -1,9 +1,11 @@
-"""The referee feature: time limit, end of the task, observers (the transport's hand-off), summary and table."""
+"""The referee feature: time limit, end of the task, its publications (the transports' hand-off), summary and
+table."""
 
 from __future__ import annotations
 
 import logging
 from pathlib import Path
+from typing import Any
 
 import pytest
 from referee_worlds import BOXES, ITEMS, MODERATOR, make_sim, run_for
@@ -11,7 +13,25 @@ from sigcore_referee import Referee, RefereeEvent
 from sigcore_referee.exceptions import TaskFinishedError
 
 from sigcore import plugins
+from sigcore.publish import Publication, PublicationSink
 from sigcore.sim import Simulation, run
+
+
+class Sink(PublicationSink):
+    """Keeps what the referee publishes, by topic; ``broken`` raises on every value."""
+
+    def __init__(self, broken: bool = False, seen: list[tuple[str, dict[str, Any]]] | None = None) -> None:
+        self.broken = broken
+        self.seen: list[tuple[str, dict[str, Any]]] = [] if seen is None else seen
+
+    def declare(self, publication: Publication) -> None:
+        pass
+
+    def publish(self, publication: Publication, stamp_ns: int, value: dict[str, Any]) -> None:
+        if self.broken:
+            raise RuntimeError("publisher gone")
+        if publication.topic.startswith("/referee/"):
+            self.seen.append((publication.topic, value))
 
 
 def _referee(sim: Simulation) -> Referee:
@@ -36,7 +56,7 @@ def test_time_limit_ends_the_task(tmp_path: Path) -> None:
     assert ref.finished and ref.result == "time_limit" and not ref.succeeded
     assert ref.end_time == pytest.approx(1.0)
     assert ref.events == [RefereeEvent(1.0, "end", "time limit of 1 s reached", 0)]
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
     run_for(sim, 2.0)
     assert ref.score == 0 and len(ref.events) == 1
     with pytest.raises(TaskFinishedError, match="ended at t = 1.00 s"):
@@ -61,22 +81,23 @@ def test_no_time_limit(tmp_path: Path) -> None:
     assert not _referee(sim).finished
 
 
-def test_observers_see_each_event_and_a_raising_one_breaks_nothing(tmp_path: Path,
-                                                                   caplog: pytest.LogCaptureFixture) -> None:
-    """Every observer gets every event as it is recorded; one that raises is logged and the others still run."""
+def test_every_event_is_published_and_a_raising_sink_breaks_nothing(tmp_path: Path,
+                                                                    caplog: pytest.LogCaptureFixture) -> None:
+    """Every event is published on /referee/events as it is recorded, with the running score; a sink that raises is
+    logged and the others (and the referee) go on."""
     sim = make_sim(tmp_path, BOXES + ITEMS, 'rules="cleanup"')
     ref = _referee(sim)
-    seen: list[RefereeEvent] = []
-
-    def broken(event: RefereeEvent) -> None:
-        raise RuntimeError("publisher gone")
-
-    ref.observers += [broken, seen.append]
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
-    sim.agents["petbottle_1"].set_position([1.0, 0.0, 0.6])
-    with caplog.at_level(logging.ERROR, "sigcore.referee"):
+    sink = Sink()
+    sim.publications.connect(Sink(broken=True))
+    sim.publications.connect(sink)
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["petbottle_1"].set_position([1.0, 0.0, 0.6])
+    with caplog.at_level(logging.ERROR, "sigcore"):
         run_for(sim, 3.0)
-    assert seen == ref.events and [e.kind for e in seen] == ["correct_box", "correct_box", "end"]
+    events = [value for topic, value in sink.seen if topic == "/referee/events"]
+    assert [(e["kind"], e["points"]) for e in events] == [(e.kind, e.points) for e in ref.events]
+    assert [e["kind"] for e in events] == ["correct_box", "correct_box", "end"]
+    assert events[-1]["score"] == ref.score
     assert "publisher gone" in caplog.text
 
 
@@ -84,8 +105,8 @@ def test_report_is_the_score_table(tmp_path: Path) -> None:
     """report() has a verdict line, one line per event with the running total, and a total line."""
     sim = make_sim(tmp_path, BOXES + ITEMS, 'rules="cleanup"')
     ref = _referee(sim)
-    sim.agents["can_0"].set_position([1.0, 0.0, 0.6])
-    sim.agents["petbottle_1"].set_position([1.0, 0.1, 0.7])
+    sim.entities["can_0"].set_position([1.0, 0.0, 0.6])
+    sim.entities["petbottle_1"].set_position([1.0, 0.1, 0.7])
     run_for(sim, 3.0)
     lines = ref.report()
     assert lines[0].startswith("referee (cleanup rules): failed at t = ") and lines[0].endswith("score 400")
@@ -110,11 +131,12 @@ def test_reset_starts_a_new_trial(tmp_path: Path) -> None:
     assert ref.finished and ref.end_time == pytest.approx(2.2)
 
 
-def test_observers_see_the_result_with_the_end_event(tmp_path: Path) -> None:
-    """When the 'end' event reaches an observer, finished and result are already set (a transport publishes them)."""
+def test_the_result_is_published_with_the_end_event(tmp_path: Path) -> None:
+    """The 'end' event is published when finished and result are already set: the result follows it at once."""
     sim = make_sim(tmp_path, BOXES + ITEMS, 'rules="cleanup" time_limit="0.3"')
-    ref = _referee(sim)
-    seen: list[tuple[str, bool, str]] = []
-    ref.observers.append(lambda e: seen.append((e.kind, ref.finished, ref.result)))
+    sink = Sink()
+    sim.publications.connect(sink)
     run_for(sim, 0.5)
-    assert seen == [("end", True, "time_limit")]
+    topics = [(topic, value.get("kind", value.get("result"))) for topic, value in sink.seen
+              if topic != "/referee/score"]
+    assert topics == [("/referee/events", "end"), ("/referee/result", "time_limit")]

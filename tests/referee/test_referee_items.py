@@ -37,7 +37,7 @@ def test_items_at_rest_where_they_start_are_not_judged(sim: Simulation) -> None:
 
 def test_dropped_in_the_right_box(sim: Simulation) -> None:
     """An item that comes to rest inside a box sharing one of its tags scores correct_box (+1000), once."""
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
     run_for(sim, 3.0)
     ref = _referee(sim)
     assert _kinds(ref) == [("correct_box", "can_0", 1000)] and ref.score == 1000
@@ -47,9 +47,9 @@ def test_dropped_in_the_right_box(sim: Simulation) -> None:
 
 def test_dropped_in_the_wrong_box(sim: Simulation) -> None:
     """An item at rest in a box that does not accept it scores wrong_box (-600) and stays scored."""
-    sim.agents["can_0"].set_position([1.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([1.0, 0.0, 0.6])
     run_for(sim, 2.0)
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])  # moving it on afterwards changes nothing
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])  # moving it on afterwards changes nothing
     run_for(sim, 2.0)
     ref = _referee(sim)
     assert _kinds(ref) == [("wrong_box", "can_0", -600)] and ref.score == -600
@@ -58,18 +58,18 @@ def test_dropped_in_the_wrong_box(sim: Simulation) -> None:
 
 def test_dropped_outside_records_an_event_without_points(sim: Simulation) -> None:
     """An item at rest outside every box records 'outside' (0 points) and may still be put in a box later."""
-    sim.agents["can_0"].set_position([0.5, 0.8, 0.5])
+    sim.entities["can_0"].set_position([0.5, 0.8, 0.5])
     run_for(sim, 2.0)
     ref = _referee(sim)
     assert _kinds(ref) == [("outside", "can_0", 0)] and ref.score == 0
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
     run_for(sim, 2.0)
     assert _kinds(ref) == [("outside", "can_0", 0), ("correct_box", "can_0", 1000)]
 
 
 def test_released_above_a_box_that_bounces_out_is_not_counted(sim: Simulation) -> None:
     """An item let go right above the opening but thrown sideways comes to rest outside: no box points."""
-    can = sim.agents["can_0"]
+    can = sim.entities["can_0"]
     can.set_position([0.0, 0.0, 0.6])
     can.set_velocity([2.0, 0.0, 0.0])
     run_for(sim, 3.0)
@@ -80,15 +80,15 @@ def test_released_above_a_box_that_bounces_out_is_not_counted(sim: Simulation) -
 
 def test_no_judgement_while_still_moving(sim: Simulation) -> None:
     """An item inside a box is judged only after rest_time at rest: not while it is still falling or settling."""
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
     run_for(sim, 0.6)
     assert _referee(sim).events == []
 
 
 def test_every_item_in_its_box_ends_the_task_succeeded(sim: Simulation) -> None:
     """When every trash item is in its correct box the task ends 'succeeded' with a final 'end' event."""
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
-    sim.agents["petbottle_1"].set_position([1.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["petbottle_1"].set_position([1.0, 0.0, 0.6])
     run_for(sim, 3.0)
     ref = _referee(sim)
     assert ref.finished and ref.result == "succeeded" and ref.succeeded and ref.score == 2000
@@ -98,8 +98,8 @@ def test_every_item_in_its_box_ends_the_task_succeeded(sim: Simulation) -> None:
 
 def test_one_item_in_a_wrong_box_ends_the_task_failed(sim: Simulation) -> None:
     """When every item is in a box but one in a wrong one, the task ends 'failed' naming it."""
-    sim.agents["can_0"].set_position([1.0, 0.0, 0.6])
-    sim.agents["petbottle_1"].set_position([1.0, 0.1, 0.7])
+    sim.entities["can_0"].set_position([1.0, 0.0, 0.6])
+    sim.entities["petbottle_1"].set_position([1.0, 0.1, 0.7])
     run_for(sim, 3.0)
     ref = _referee(sim)
     assert ref.result == "failed" and not ref.succeeded and ref.score == 400
@@ -113,7 +113,7 @@ def test_grasp_bonus_once_per_item(tmp_path: Path) -> None:
     robot = sim.robot("robot_000")
     ref = _referee(sim)
     for _ in range(2):
-        sim.agents["can_0"].set_position(robot.part_position("l_hand_link"))
+        sim.entities["can_0"].set_position(robot.part_position("l_hand_link"))
         robot.grasp("l_hand_link", "can_0")
         run_for(sim, 0.5)
         assert robot.release("l_hand_link") == "can_0"
@@ -121,7 +121,7 @@ def test_grasp_bonus_once_per_item(tmp_path: Path) -> None:
     assert [(e.kind, e.text, e.points) for e in ref.events if e.kind == "grasp"] == [
         ("grasp", "robot_000 grasped can_0", 50)]
     assert ref.items is not None and ref.items.items["can_0"].grasped
-    assert np.linalg.norm(sim.agents["can_0"].position()[:2]) < 0.5  # fell by the robot: 'outside' at most
+    assert np.linalg.norm(sim.entities["can_0"].position()[:2]) < 0.5  # fell by the robot: 'outside' at most
 
 
 PLATE = """
@@ -134,6 +134,6 @@ def test_box_inner_from_the_plugin_element(tmp_path: Path) -> None:
     with pytest.raises(WorldError, match="cannot find the inner volume of trash box 'tray': it is not a URDF"):
         make_sim(tmp_path, PLATE)
     sim = make_sim(tmp_path, PLATE, 'rules="cleanup" box_inner="-0.3 -0.3 0 0.3 0.3 0.3"')
-    sim.agents["can_0"].set_position([0.1, 0.1, 0.3])
+    sim.entities["can_0"].set_position([0.1, 0.1, 0.3])
     run_for(sim, 2.0)
     assert _kinds(_referee(sim)) == [("correct_box", "can_0", 1000), ("end", "every", 0)]

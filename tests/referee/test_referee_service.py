@@ -83,7 +83,7 @@ def test_sender_must_connect_first(sim: Simulation) -> None:
 def test_service_only_referee_watches_nothing(sim: Simulation) -> None:
     """Without rules="cleanup" no collision observer is attached and items are not judged."""
     assert sim.events.subscriptions("collision") == ()
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
     run_for(sim, 2.0)
     assert _referee(sim).events == [] and _referee(sim).items is None
 
@@ -91,4 +91,4 @@ def test_service_only_referee_watches_nothing(sim: Simulation) -> None:
 def test_service_name_is_configurable(tmp_path: Path) -> None:
     """service="Referee" offers the sig_ros spelling instead."""
     s = make_sim(tmp_path, BOXES + ITEMS + MODERATOR, 'service="Referee"')
-    assert set(s.services) == {"Referee"}
+    assert set(s.features.services) == {"Referee"}

@@ -24,7 +24,7 @@ def _referee(sim: Simulation) -> Referee:
 
 
 def _spawn(sim: Simulation, request: SpawnRequest) -> str:
-    (result,) = sim.spawn([request])
+    (result,) = sim.entities.spawn([request])
     assert isinstance(result, str), result
     return result
 
@@ -54,7 +54,7 @@ def test_spawned_can_in_the_cleanup_world_is_scored(backend: str) -> None:
     name = _spawn(sim, SpawnRequest(name="can_9", uri="model://can", xyz=(0.0, 0.0, 0.1)))
     run_for(sim, 1.5)  # falls 4 cm onto the floor and settles: where it starts, not 'outside'
     assert ref.events == [] and ref.summary()["items"] == 4
-    sim.agents[name].set_position([2.0, -2.2, 0.6])  # above trashbox_2's opening
+    sim.entities[name].set_position([2.0, -2.2, 0.6])  # above trashbox_2's opening
     run_for(sim, 3.0)
     assert _events(ref) == [("correct_box", "can_9 in trashbox_2", 1000)] and ref.score == 1000
     assert ref.summary()["placed"] == 1 and ref.result == "running"
@@ -64,11 +64,11 @@ def test_every_item_spawned_ones_included_ends_succeeded(sim: Simulation) -> Non
     """The task ends 'succeeded' only once the spawned item is in its box too; the summary counts it."""
     ref = _referee(sim)
     name = _spawn(sim, SpawnRequest(name="extra_can", resource=CAN, xyz=(-1.0, -1.0, 0.06)))
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
-    sim.agents["petbottle_1"].set_position([1.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["petbottle_1"].set_position([1.0, 0.0, 0.6])
     run_for(sim, 3.0)
     assert not ref.finished and ref.summary()["placed"] == 2 and ref.summary()["items"] == 3
-    sim.agents[name].set_position([0.05, 0.05, 0.6])
+    sim.entities[name].set_position([0.05, 0.05, 0.6])
     run_for(sim, 3.0)
     assert ref.finished and ref.succeeded and ref.score == 3000
     assert ref.events[-1].text == "every trash item is in its correct box (3)"
@@ -86,13 +86,13 @@ def test_spawned_item_landing_in_a_box_is_judged(sim: Simulation) -> None:
 def test_deleted_item_is_no_longer_expected(sim: Simulation) -> None:
     """Deleting an unscored item ends the task once the others are in; a deleted scored item's event stays."""
     ref = _referee(sim)
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
     run_for(sim, 3.0)
     assert _events(ref) == [("correct_box", "can_0 in box_can", 1000)]
-    sim.delete(["can_0"])
+    sim.entities.delete(["can_0"])
     run_for(sim, 0.5)
     assert _events(ref) == [("correct_box", "can_0 in box_can", 1000)] and not ref.finished
-    sim.delete(["petbottle_1"])
+    sim.entities.delete(["petbottle_1"])
     run_for(sim, 0.5)
     assert not ref.finished  # no item left: nothing to judge, the task is not 'succeeded' by default
     assert ref.summary()["items"] == 0 and ref.score == 1000
@@ -101,9 +101,9 @@ def test_deleted_item_is_no_longer_expected(sim: Simulation) -> None:
 def test_deleting_the_last_unscored_item_ends_the_task(sim: Simulation) -> None:
     """With one item in its box, deleting the other (never scored) ends the task 'succeeded'."""
     ref = _referee(sim)
-    sim.agents["can_0"].set_position([0.0, 0.0, 0.6])
+    sim.entities["can_0"].set_position([0.0, 0.0, 0.6])
     run_for(sim, 3.0)
-    sim.delete(["petbottle_1"])
+    sim.entities.delete(["petbottle_1"])
     run_for(sim, 0.5)
     assert ref.finished and ref.succeeded and ref.events[-1].text == "every trash item is in its correct box (1)"
 
@@ -120,10 +120,10 @@ def test_spawned_trash_box_takes_items(sim: Simulation) -> None:
     assert [b.accepts for b in ref.items.boxes if b.name == box] == [frozenset({"burnable"})]
     assert ref.collisions.penalised[table] == ["furniture"]
     run_for(sim, 1.0)
-    sim.agents[apple].set_position([3.0, 3.0, 0.6])
+    sim.entities[apple].set_position([3.0, 3.0, 0.6])
     run_for(sim, 3.0)
     assert _events(ref) == [("correct_box", "apple_9 in box_burn", 1000)]
-    sim.delete([table])
+    sim.entities.delete([table])
     assert table not in ref.collisions.penalised
 
 
@@ -137,5 +137,5 @@ def test_spawned_robot_is_watched_until_deleted(sim: Simulation) -> None:
                                               "caster_back_link"}
     run_for(sim, 1.0)  # standing on its wheels and back caster: no floor collision
     assert ref.events == []
-    sim.delete([robot])
+    sim.entities.delete([robot])
     assert robot not in ref.collisions.robots and robot not in ref.collisions.floor_ok

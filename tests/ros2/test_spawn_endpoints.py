@@ -35,7 +35,7 @@ def test_a_queued_request_of_a_deleted_agent_is_refused(monkeypatch: pytest.Monk
     sim, transport, env = start_in_process(monkeypatch, WORLD, Ros2Config(sigros_agents=("all",)))
     proc = None
     try:
-        assert sim.spawn([SpawnRequest(name="crate", resource=BOX, xyz=(1.0, -1.0, 0.05)),
+        assert sim.entities.spawn([SpawnRequest(name="crate", resource=BOX, xyz=(1.0, -1.0, 0.05)),
                           SpawnRequest(name="other", resource=BOX, xyz=(-1.0, -1.0, 0.05), namespace="/ns")]) \
             == ["crate", "other"]
         assert "crate_get_obj_position" in transport.endpoints and "/ns/other_get_obj_position" in transport.endpoints
@@ -46,7 +46,7 @@ def test_a_queued_request_of_a_deleted_agent_is_refused(monkeypatch: pytest.Monk
         while not transport._receiver.pending and time.monotonic() < end:  # the request arrives; not served
             time.sleep(0.01)
         assert transport._receiver.pending, "the request did not arrive within 30 s"
-        sim.delete(["crate"])
+        sim.entities.delete(["crate"])
         for _ in range(100):  # serve on (nothing of crate's is left to serve)
             transport.service(0.01)
         out, err = proc.communicate(timeout=40)
@@ -76,13 +76,13 @@ def test_spawned_agents_follow_the_sigros_agents_selection(monkeypatch: pytest.M
     transport.start(sim)
     try:
         sigbot = str(WORLD.parents[3] / "worlds" / "models" / "sigbot" / "sigbot.urdf")
-        assert sim.spawn([SpawnRequest(name="plain", resource=BOX, xyz=(1.0, -1.0, 0.05)),
+        assert sim.entities.spawn([SpawnRequest(name="plain", resource=BOX, xyz=(1.0, -1.0, 0.05)),
                           SpawnRequest(name="kept", resource=BOX, xyz=(-1.0, -1.0, 0.05), tags=("keep",)),
                           SpawnRequest(name="rover", uri=sigbot, xyz=(1.0, 1.0, 0.0))]) == ["plain", "kept", "rover"]
         names = set(transport.endpoints)
         assert not [n for n in names if n.startswith(("plain_", "/plain_"))]
         assert {"kept_get_obj_position", "kept_onRecvMsg", "rover_get_obj_position", "/rover/joint_states"} <= names
-        sim.delete(["rover"])
+        sim.entities.delete(["rover"])
         assert not [n for n in transport.endpoints if "rover" in n]
     finally:
         transport.stop()

@@ -57,7 +57,7 @@ def test_ate_on_a_short_route_below_1cm(room_sim: Simulation) -> None:
     assert math.sqrt(float(np.mean(err**2))) < 0.01
     assert err[-1] < 0.01
     # the wheel odometry alone drifts more than SLAM (the test would pass trivially with perfect odometry)
-    odo = room_sim.odometry[ROBOT].state
+    odo = room_sim.entities.odometry[ROBOT].state
     assert math.hypot(odo.x - ref[-1, 0], odo.y - ref[-1, 1]) > err[-1]
 
 
@@ -74,7 +74,7 @@ def test_hand_off_frames_are_consistent(room_sim: Simulation) -> None:
     assert state.stamp == pytest.approx(slam.pose_history[-1][0])
     assert state.stamp == pytest.approx(math.floor(room_sim.time * 10 + 1e-6) / 10)  # the last 10 Hz scan
     assert (state.robot, state.base_frame) == (ROBOT, "base_link")
-    odo = room_sim.odometry[ROBOT].state
+    odo = room_sim.entities.odometry[ROBOT].state
     assert state.odom_to_base.x == pytest.approx(odo.x, abs=1e-3)
 
 
@@ -102,10 +102,10 @@ def test_scans_without_returns_keep_the_pose(room_sim: Simulation) -> None:
     slam = _slam(room_sim)
     before = slam.latest
     assert before is not None
-    scan = room_sim.lidars[0].last
+    scan = room_sim.entities.lidars[0].last
     assert scan is not None
     empty = type(scan)(**{**scan.__dict__, "ranges": np.full_like(scan.ranges, np.inf), "stamp": scan.stamp + 0.1})
-    state = slam.process(empty, room_sim.odometry[ROBOT].state)
+    state = slam.process(empty, room_sim.entities.odometry[ROBOT].state)
     assert not state.registered
     assert math.hypot(state.map_to_base.x - before.map_to_base.x, state.map_to_base.y - before.map_to_base.y) < 0.01
 
@@ -138,7 +138,7 @@ def test_world_without_the_plugin_pays_nothing() -> None:
     sim.step(100)
     assert "slam" not in sim.features
     assert not sim.events.subscriptions("scan") and not sim.events.subscriptions("step")
-    assert sim.odometry == {}
+    assert sim.entities.odometry == {}
     with_slam = Simulation(room_world(PLUGIN_LINE), "mujoco")
     assert len(with_slam.events.subscriptions("scan")) == 1 and len(with_slam.events.subscriptions("step")) == 1
 

@@ -70,7 +70,7 @@ def test_ranges_match_the_room_within_1cm() -> None:
     """Every beam's range [m] equals the analytic distance to the room's walls or the pillar within 1 cm."""
     sim = Simulation(room_world(None), "mujoco")
     sim.step(50)
-    scan = sim.lidars[0].last
+    scan = sim.entities.lidars[0].last
     assert scan is not None
     expected = _analytic(sim, scan)
     assert np.all(np.isfinite(scan.ranges))

@@ -276,7 +276,7 @@ def test_the_texts_are_those_the_live_viewer_showed(tmp_path: Path) -> None:
     viewer.snapshot_observers.append(lambda s: live.append((s.step, dict(s.texts))))
 
     def reset_at_20_s(s: Simulation) -> None:
-        if s.elapsed_steps == 10_000:
+        if s.worlds.elapsed_steps == 10_000:
             viewer._post(v.reset)  # as the panel's Reset does
 
     sim.events.subscribe("step", reset_at_20_s)
@@ -341,7 +341,7 @@ def test_an_entity_deleted_while_running_is_hidden_from_then_on(tmp_path: Path) 
     recorder = Recorder(sim, tmp_path / "deleted")
     try:
         sim.step(500)
-        sim.delete(["can_0"])
+        sim.entities.delete(["can_0"])
         sim.step(500)
     finally:
         recorder.close()
@@ -423,7 +423,7 @@ def test_an_entity_spawned_while_running_is_drawn_from_then_on(tmp_path: Path) -
         sim.step(500)
         requests = [SpawnRequest(name="crate", resource='<object name="x" shape="box" size="0.2 0.2 0.2" mass="1"/>',
                                  xyz=(0.0, 1.0, 0.5))]
-        sim.inputs.note_spawn(requests, sim.spawn(requests))
+        sim.inputs.note_spawn(requests, sim.entities.spawn(requests))
         sim.step(500)
     finally:
         recorder.close()

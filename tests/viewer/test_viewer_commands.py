@@ -159,9 +159,9 @@ def test_pause_step_n_and_play(cleanup: Simulation, lockstep: Callable[[Simulati
         snap = lock.run(v.step(bad))
         assert newest_note(snap) == f"steps must be a whole number from 1 to 100000, got {shown}"
         assert (control.paused, control.pending_steps) == (True, 5)
-    before = cleanup.elapsed_steps
+    before = cleanup.worlds.elapsed_steps
     assert [lock.tick() for _ in range(7)] == [True] * 5 + [False] * 2
-    assert cleanup.elapsed_steps == before + 5
+    assert cleanup.worlds.elapsed_steps == before + 5
     snap = lock.run(v.play)
     assert not control.paused and snap.status.startswith("**running")
     assert lock.tick() and lock.tick()
@@ -202,12 +202,12 @@ def test_message_reaches_the_agent(cleanup: Simulation, lockstep: Callable[[Simu
     snap = lock.run(v.send_message("ghost", "hello"))
     note = newest_note(snap)
     assert note.startswith("agent 'ghost' no longer exists: the message was not sent; agents: ")
-    assert all(name in note for name in cleanup.agents)
+    assert all(name in note for name in cleanup.entities)
     snap = lock.run(v.send_message("robot_000", "   "))
     assert newest_note(snap) == "type a message first"
-    before = cleanup.elapsed_steps
+    before = cleanup.worlds.elapsed_steps
     assert lock.tick() and lock.tick()
-    assert cleanup.elapsed_steps == before + 2
+    assert cleanup.worlds.elapsed_steps == before + 2
     assert len(received) == 1
 
 
@@ -218,9 +218,9 @@ def test_move_entity(cleanup: Simulation, lockstep: Callable[[Simulation], Locks
     node of its frame); table_0 is static: a note says so and its pose is unchanged."""
     lock = lockstep(cleanup)
     target, wxyz = np.array([-1.0, 0.3, 0.5]), np.array([math.cos(0.3), 0.0, 0.0, math.sin(0.3)])
-    steps = cleanup.elapsed_steps
+    steps = cleanup.worlds.elapsed_steps
     snap = lock.run(v.move_entity("can_0", target, wxyz))
-    assert cleanup.elapsed_steps == steps
+    assert cleanup.worlds.elapsed_steps == steps
     pos, quat = cleanup.backend.get_pose("can_0")
     np.testing.assert_allclose(pos, target, atol=1e-6)
     np.testing.assert_allclose(quat, wxyz, atol=1e-6)
@@ -245,10 +245,10 @@ def test_reset_during_a_grasp(cleanup: Simulation, lockstep: Callable[[Simulatio
     lock = lockstep(cleanup)
     start = np.array(cleanup.backend.get_pose("can_0")[0])
     robot = cleanup.robot("robot_000")
-    cleanup.agents["can_0"].set_position(robot.part_position("l_hand_link"))
+    cleanup.entities["can_0"].set_position(robot.part_position("l_hand_link"))
     robot.grasp("l_hand_link", "can_0")
     assert lock.tick()
-    assert cleanup.grasps.items() == [("robot_000", "l_hand_link", "can_0")]
+    assert cleanup.entities.grasps.items() == [("robot_000", "l_hand_link", "can_0")]
     for _ in range(500):  # the referee scores the grasp within its check period (deterministic: in steps)
         if "robot_000 grasped can_0" in lock.show().texts["events"]:
             break
@@ -256,7 +256,7 @@ def test_reset_during_a_grasp(cleanup: Simulation, lockstep: Callable[[Simulatio
     assert "robot_000 grasped can_0" in lock.show().texts["events"]
     snap = lock.run(v.reset)
     assert newest_note(snap) == "reset to the start: robot_000 let go of can_0"
-    assert cleanup.grasps.items() == []
+    assert cleanup.entities.grasps.items() == []
     np.testing.assert_allclose(cleanup.backend.get_pose("can_0")[0], start, atol=1e-3)
     assert lock.tick()
     after = lock.show()  # the old trial's events are gone with it (the reset event); the score is the new one's
@@ -274,7 +274,7 @@ def test_snapshot_shows_every_entity_the_status_and_the_score(
     snap = lock.show()
     layout = lock.taken[0].layout
     assert layout is not None
-    assert [entity for entity, part in layout.parts if part is None] == list(cleanup.entity_names)
+    assert [entity for entity, part in layout.parts if part is None] == list(cleanup.entities.names)
     assert len(set(layout.frames)) == len(layout.frames) == snap.poses.shape[0]
     assert np.isfinite(snap.poses).all()
     np.testing.assert_allclose(np.linalg.norm(snap.poses[:, 3:], axis=1), 1.0, atol=1e-6)
@@ -284,7 +284,7 @@ def test_snapshot_shows_every_entity_the_status_and_the_score(
     assert snap.step == 10
     assert "world `cleanup`" in snap.status and " step 10 " in snap.status
     assert snap.texts["score"] == "score: 0"
-    assert snap.agents == list(cleanup.agents) and snap.entities == list(cleanup.entity_names)
+    assert snap.agents == list(cleanup.entities) and snap.entities == list(cleanup.entities.names)
 
 
 def test_log_publication_is_shown(sim: Simulation, lockstep: Callable[[Simulation], Lockstep]) -> None:
@@ -311,9 +311,9 @@ def test_failing_command_is_a_note(cleanup: Simulation, lockstep: Callable[[Simu
         raise ZeroDivisionError("division by zero")
     snap = lock.run(broken)
     assert newest_note(snap) == "that did not work: ZeroDivisionError: division by zero"
-    before = cleanup.elapsed_steps
+    before = cleanup.worlds.elapsed_steps
     assert [lock.tick() for _ in range(3)] == [True] * 3
-    assert cleanup.elapsed_steps == before + 3
+    assert cleanup.worlds.elapsed_steps == before + 3
 
 
 # ------------------------------------------------------------------ the server
@@ -372,8 +372,8 @@ def test_run_services_the_viewer_and_frees_its_port(cleanup: Simulation,
     ran: list[int] = []
 
     def at_step_100(sim: Simulation) -> None:
-        if sim.elapsed_steps == 100:
-            viewer._post(lambda s: ran.append(s.elapsed_steps))
+        if sim.worlds.elapsed_steps == 100:
+            viewer._post(lambda s: ran.append(s.worlds.elapsed_steps))
 
     taken: list[Snapshot] = []
     viewer.snapshot_observers.append(taken.append)
@@ -421,7 +421,7 @@ def test_a_crashed_viewer_process_leaves_the_run_going(cleanup: Simulation, view
     assert pid is not None
 
     def kill_at_step_50(sim: Simulation) -> None:
-        if sim.elapsed_steps == 50:
+        if sim.worlds.elapsed_steps == 50:
             os.kill(pid, signal.SIGKILL)
             assert viewer._proc is not None
             viewer._proc.wait(timeout=TIMEOUT)  # gone, its end of the socket closed, before step 51

@@ -46,7 +46,7 @@ def scene() -> tuple[Any, np.ndarray, list[str]]:
     """The clean-up world's layout, its poses and its entity names."""
     sim = Simulation(parse_world(CLEANUP), "mujoco")
     layout = layout_of(sim)
-    return layout, sim.backend.get_poses(layout.parts), list(sim.entity_names)
+    return layout, sim.backend.get_poses(layout.parts), list(sim.entities.names)
 
 
 @pytest.fixture

@@ -87,7 +87,8 @@ def test_contacts_mark_the_parts_that_touch(started: tuple[Simulation, WebViewer
     assert markers is not None
     can = np.asarray(sim.backend.get_pose("can_0")[0])
     assert np.min(np.linalg.norm(markers - can, axis=1)) < 1e-9  # the can touches table_0
-    wheels = [np.asarray(sim.backend.get_pose("robot_000", part)[0]) for part in sim.rolling_parts("robot_000")]
+    wheels = [np.asarray(sim.backend.get_pose("robot_000", part)[0])
+              for part in sim.entities.rolling_parts("robot_000")]
     for wheel in wheels:  # rolling on the floor is no contact worth a marker
         assert np.min(np.linalg.norm(markers - wheel, axis=1)) > 1e-6
 

@@ -49,7 +49,7 @@ class IkFeature(Feature):
         return entries()
 
     def __init__(self, sim: Simulation, config: IkConfig) -> None:
-        robots = [n for n in sim.agents if sim.agents[n].kind == "robot"]
+        robots = [n for n in sim.entities if sim.entities[n].kind == "robot"]
         names = list(config.agent) or robots
         for n in names:
             if n not in robots:
@@ -173,7 +173,7 @@ class IkFeature(Feature):
         gravity = chain_gravity(r.model, motion.chain, r.configuration(), r.gravity_in_root())
         targets, torques = motion.update(self.sim.time, self.sim.dt, angles, speeds, gravity)
         handle = self.sim.robot(r.name)
-        dynamic = self.sim.mode(r.name, "dynamics")
+        dynamic = self.sim.entities.mode(r.name, "dynamics")
         for joint, target, torque in zip(motion.chain.joints, targets, torques, strict=True):
             handle.set_joint_target(joint, float(target))
             if torque != 0.0 and dynamic:

@@ -34,7 +34,7 @@ class RobotIk:
 
     def __init__(self, sim: Simulation, name: str) -> None:
         self.sim, self.name = sim, name
-        spec = sim.robot_model(name)
+        spec = sim.entities.robot_model(name)
         self.model = RobotModel(sim.world.urdf(name))
         sides = {g.part: g.side for g in spec.grippers}
         if spec.arms:

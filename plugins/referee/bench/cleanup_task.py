@@ -33,7 +33,7 @@ def main() -> None:
     for _ in range(args.runs):
         t0 = time.perf_counter()
         sim = Simulation(parse_world(Path(args.world)), "mujoco")
-        sim.set_controller("robot_000", CleanupRobot())
+        sim.entities.set_controller("robot_000", CleanupRobot())
         feature = sim.features["referee"]
         assert isinstance(feature, Referee)
         referee = feature

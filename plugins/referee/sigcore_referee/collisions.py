@@ -32,8 +32,8 @@ class Episode:
 
 def default_floor_parts(sim: Simulation, robot: str) -> frozenset[str]:
     """Parts of ``robot`` that stand on the floor: its wheels and casters, as the core's contact events define
-    them (``Simulation.rolling_parts``; their floor contacts are no collision events)."""
-    return sim.rolling_parts(robot)
+    them (``sim.entities.rolling_parts``; their floor contacts are no collision events)."""
+    return sim.entities.rolling_parts(robot)
 
 
 class CollisionRule:

@@ -56,7 +56,7 @@ class CleanupRobot(Controller):
             raise ApiError(f"cleanup.robot drives a robot; '{ctx.name}' is a {ctx.kind}")
         self.robot = ctx
         self.follower = Follower(ctx, PERIOD)
-        self.radius = {g.part: g.grasp_radius for g in ctx.sim.robot_model(ctx.name).grippers}
+        self.radius = {g.part: g.grasp_radius for g in ctx.sim.entities.robot_model(ctx.name).grippers}
         self._script = self._run(plan(ctx.sim))
 
     def on_action(self, ctx: SimObj) -> float:
@@ -90,7 +90,7 @@ class CleanupRobot(Controller):
         yield from self._approach(job.pick)
         yield from self._pick(job.side, hand, job.item)
         yield from self._until(lambda: self.follower.go_to(job.pick.stage_x, job.pick.stage_y, backwards=True))
-        if not self.robot.sim.grasps.is_held(job.item):
+        if not self.robot.sim.entities.grasps.is_held(job.item):
             self._note(f"could not grasp {job.item}; skipping it")
             return
         self._note(f"carrying {job.item} to {job.box}")
@@ -117,7 +117,7 @@ class CleanupRobot(Controller):
             return False
 
         yield from self._arm(side, hand_down(side, x, y, z + GRASP_ABOVE), 1.0, stop_when=grasped)
-        if not self.robot.sim.grasps.is_held(item):
+        if not self.robot.sim.entities.grasps.is_held(item):
             grasped()
         yield from self._arm(side, TUCK, 1.2)
 

@@ -92,7 +92,7 @@ class ItemRule:
                 self._look(state, now)
 
     def _look(self, state: ItemState, now: float) -> None:
-        holder = self.sim.grasps.held_by(state.name)
+        holder = self.sim.entities.grasps.held_by(state.name)
         if holder is not None:
             if not state.grasped:
                 state.grasped = True

@@ -4,7 +4,6 @@ task's rules detected from the simulation itself."""
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 from typing import Literal
 
 from pydantic import BaseModel
@@ -35,8 +34,9 @@ class Referee(Feature):
     """Keeps the score of a world (``<plugin name="referee" rules="cleanup" .../>``).
 
     The hand-off to transports: :attr:`score`, :attr:`events` (every :class:`RefereeEvent` in order),
-    :attr:`finished`, :attr:`result`, and :attr:`observers` (each called with every new event as it happens; the
-    last one of a task is of kind ``end``).
+    :attr:`finished`, :attr:`result`, and the publications of :class:`~sigcore_referee.topics.RefereeTopics`
+    (``/referee/events`` with every new event as it happens, the last one of a task of kind ``end``; ``/referee/score``;
+    ``/referee/result``), which transports, viewers and recorders receive through the core's publication contract.
 
     Raises:
         FieldError: ``robots`` names no robot, or (``rules="cleanup"``) no entity has the ``trash_tag``.
@@ -57,7 +57,6 @@ class Referee(Feature):
         self.config = cfg = config
         self.score = 0
         self.events: list[RefereeEvent] = []
-        self.observers: list[Callable[[RefereeEvent], None]] = []
         self.finished = False
         self.result: Result = "running"
         self.start_time = sim.time
@@ -66,7 +65,7 @@ class Referee(Feature):
         self.collisions: CollisionRule | None = None
         if cfg.rules == "cleanup":
             self._cleanup_rules()
-        sim.register_service(cfg.service, self.on_message)
+        sim.features.register_service(cfg.service, self.on_message)
         if cfg.rules == "cleanup" or cfg.time_limit > 0:
             self._every = max(1, round(1.0 / (cfg.rate * sim.dt)))
             sim.events.subscribe("step", self._on_step)
@@ -76,7 +75,7 @@ class Referee(Feature):
         cfg, sim = self.config, self.sim
         robots = list(cfg.robots) if cfg.robots is not None else [
             a.name for a in sim.world.entities if a.kind == "robot"]
-        unknown = [r for r in robots if r not in sim.agents or sim.agents[r].kind != "robot"]
+        unknown = [r for r in robots if r not in sim.entities or sim.entities[r].kind != "robot"]
         if unknown:
             robots_here = [a.name for a in sim.world.entities if a.kind == "robot"]
             raise FieldError("robots", f"'{unknown[0]}' is not a robot of this world; robots: "
@@ -143,11 +142,7 @@ class Referee(Feature):
         event = RefereeEvent(round(self.sim.time, 6), kind, text, points)
         self.score += points
         self.events.append(event)
-        for observer in list(self.observers):
-            try:
-                observer(event)
-            except Exception:  # a transport's bug must not stop the referee or the simulation
-                log.exception("referee observer %r raised", observer)
+        self.topics.on_event(event)  # the publication contract keeps a sink's failure from the referee
 
     def on_message(self, sender: str, text: str) -> None:
         """The viewer service: score a ``Referee/<text>/<points>`` message from agent ``sender``.
@@ -163,7 +158,7 @@ class Referee(Feature):
         self.award("message", f"{sender}: {message.text}", message.points)
 
     def finish(self, result: Result, why: str) -> None:
-        """End the task (``finished`` and ``result`` are set when observers see the final ``end`` event); stop the
+        """End the task (``finished`` and ``result`` are set when the final ``end`` event is published); stop the
         run if ``stop_on_finish``."""
         if self.finished:
             return

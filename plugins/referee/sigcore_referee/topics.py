@@ -38,7 +38,7 @@ class RefereeTopics:
     """Declares the referee's publications and pushes its score, events and result.
 
     Args:
-        referee: The referee (this object observes its events).
+        referee: The referee (it hands each new event to :meth:`on_event`).
     """
 
     def __init__(self, referee: Referee) -> None:
@@ -53,7 +53,6 @@ class RefereeTopics:
                                            "the result and the score table, once the task has ended", "referee",
                                            model=ResultMsg, display="result",
                                            display_format="{result}: score {score} after {time:.1f} s"))
-        referee.observers.append(self.on_event)
         self.publish_score()
 
     def publish_score(self) -> None:

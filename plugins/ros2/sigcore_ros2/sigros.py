@@ -74,7 +74,7 @@ class SigRosEndpoints:
 
     def add(self, agents: Collection[str]) -> None:
         """Create the endpoints of ``agents`` (added while running; each under its namespace,
-        ``sim.namespace(agent)``), as the constructor does for the world's."""
+        ``sim.entities.namespace(agent)``), as the constructor does for the world's."""
         self._create(self.plan(self.sim, agents))
 
     def remove(self, agents: Collection[str], why: str) -> None:
@@ -100,7 +100,7 @@ class SigRosEndpoints:
     def _create(self, plan: list[tuple[ApiEntry, str]]) -> None:
         node, receiver, qos = self.node, self.receiver, self.qos
         for entry, agent in plan:
-            namespace = self.sim.namespace(agent)
+            namespace = self.sim.entities.namespace(agent)
             name = f"{namespace}/{entry.name_for(agent)}" if namespace else entry.name_for(agent)
             try:
                 ros_type(entry, "srv" if entry.direction == "service" else "msg")
@@ -153,7 +153,7 @@ class SigRosEndpoints:
         """``(entry, agent)`` of every subscription and service (the published entries are the core's
         publications) of ``agents`` (None: of every agent)."""
         entries = [e for e in sim.api_entries() if e.direction != "publish"]
-        return [(entry, agent) for agent, handle in sim.agents.items() for entry in entries
+        return [(entry, agent) for agent, handle in sim.entities.items() for entry in entries
                 if handle.kind in entry.kinds and (agents is None or agent in agents)]
 
     # ------------------------------------------------------------------ incoming
@@ -182,11 +182,11 @@ class SigRosEndpoints:
     def _shared_agent(self, entry: ApiEntry, fields: dict[str, Any], endpoint: str) -> tuple[str, str | None]:
         """The agent a shared endpoint's request names, and why it cannot be served (or None)."""
         agent = fields.get("name", "")
-        few = ", ".join(list(self.sim.agents)[:5]) + (", ..." if len(self.sim.agents) > 5 else "")
+        few = ", ".join(list(self.sim.entities)[:5]) + (", ..." if len(self.sim.entities) > 5 else "")
         if not agent:
             return agent, (f"{endpoint}: 'name' must name the entity (this shared endpoint serves every agent by "
                            f"name; agents: {few or 'none'})")
-        handle = self.sim.agents.get(agent)
+        handle = self.sim.entities.get(agent)
         if handle is None:  # refused here, so that each stranger name is not an endpoint of its own in the log
             return agent, f"{endpoint}: no agent {clip(agent, 80)!r}; agents: {few or 'none'}"
         if handle.kind not in entry.kinds:

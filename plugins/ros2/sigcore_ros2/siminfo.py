@@ -1,6 +1,7 @@
 """The read side of simulation_interfaces: entity filters, entity information and bounds, named poses.
 
-What an entity is (category, description, tags) is the core's ``sim.info``; its axis-aligned box in ``world`` is the
+What an entity is (category, description, tags) is the core's ``sim.entities.info``; its axis-aligned box in
+``world`` is the
 core's scene description, ``sim.scene.bounds``; named poses are the world file's ``<named_pose>`` elements and each
 robot's ``<robot>_start`` (``World.all_named_poses``). This module only translates. Bounds are returned as TYPE_BOX
 with ``points[0]`` the minimum and ``points[1]`` the maximum corner; a filter box may give its two corners in either
@@ -125,7 +126,7 @@ class EntityQueries:
         Raises:
             Refusal: a bad regular expression, category, tags mode or bounds (see :func:`bounds_test`).
         """
-        info = self.sim.info
+        info = self.sim.entities.info
         names = info.names
         if filters.filter:
             try:
@@ -152,16 +153,16 @@ class EntityQueries:
         return names
 
     def _known(self, entity: str) -> None:
-        if entity not in self.sim.info.names:
+        if entity not in self.sim.entities.info.names:
             raise Refusal(Result.RESULT_NOT_FOUND,
-                          f"no entity {quote(entity)}; entities: {', '.join(self.sim.info.names)}")
+                          f"no entity {quote(entity)}; entities: {', '.join(self.sim.entities.info.names)}")
 
     # ------------------------------------------------------------------ services: (request, response, reply)
     # Each fills ``response`` and returns False (answered at once), like SimInterfaces' own.
     def get_entity_info(self, req: Any, res: Any, reply: Any) -> bool:
         """GetEntityInfo: category, description and tags of an entity now."""
         self._known(req.entity)
-        info = self.sim.info.get(req.entity)
+        info = self.sim.entities.info.get(req.entity)
         res.info = EntityInfo(category=EntityCategory(category=CATEGORY_CODES[info.category]),
                               description=info.description, tags=list(info.tags))
         res.result = _ok()

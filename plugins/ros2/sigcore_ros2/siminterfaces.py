@@ -187,7 +187,7 @@ class SimInterfaces:
     def state(self) -> int:
         """The SimulationState constant of the simulation now."""
         c = self.sim.control
-        if not self.sim.loaded:
+        if not self.sim.worlds.loaded:
             return SimulationState.STATE_QUITTING if c.stopping else SimulationState.STATE_NO_WORLD
         if self.stopped:
             return SimulationState.STATE_STOPPED
@@ -219,7 +219,7 @@ class SimInterfaces:
         Raises:
             Refusal: INCORRECT_STATE saying ``what`` needs a world (answered by the service wrapper).
         """
-        if not self.sim.loaded:
+        if not self.sim.worlds.loaded:
             raise Refusal(Result.RESULT_INCORRECT_STATE, f"{what} refused: no world is loaded; load one first "
                                                          "(load_world)")
 
@@ -261,10 +261,10 @@ class SimInterfaces:
         return st
 
     def _unknown(self, name: str, res: Any) -> bool:
-        if name in self.sim.entity_names:
+        if name in self.sim.entities.names:
             return False
         res.result = _result(Result.RESULT_NOT_FOUND,
-                             f"no entity {quote(name)}; entities: {', '.join(self.sim.entity_names)}")
+                             f"no entity {quote(name)}; entities: {', '.join(self.sim.entities.names)}")
         return True
 
     def _get_entity_state(self, req: Any, res: Any, reply: Any) -> bool:
@@ -302,11 +302,11 @@ class SimInterfaces:
             res.result = _result(Result.RESULT_OPERATION_FAILED, "twist must be finite")
             return False
         moving = any(v != 0.0 for v in twist)
-        if moving and not self.sim.mode(req.entity, "dynamics"):
+        if moving and not self.sim.entities.mode(req.entity, "dynamics"):
             res.result = _result(Result.RESULT_OPERATION_FAILED,
                                  f"'{req.entity}' is static (dynamics off): it cannot be given a velocity")
             return False
-        dynamic = self.sim.mode(req.entity, "dynamics")
+        dynamic = self.sim.entities.mode(req.entity, "dynamics")
         try:
             self.sim.inputs.entity_state(req.entity, (p.x, p.y, p.z), q, (lin.x, lin.y, lin.z) if dynamic else None,
                                          (ang.x, ang.y, ang.z) if dynamic else None)
@@ -370,7 +370,7 @@ class SimInterfaces:
         res.spawnables = [Spawnable(uri=s.uri, description=s.description,
                                     spawn_bounds=bounds_box(*s.bounds) if s.bounds is not None
                                     else Bounds(type=Bounds.TYPE_EMPTY))
-                          for s in self.sim.spawnables()]
+                          for s in self.sim.entities.spawnables()]
         unknown = [str(source) for source in req.sources]
         res.result = _result(Result.RESULT_OK, f"sources not searched (sigcore lists worlds/models and its plugins' "
                                                f"spawnables only): {', '.join(map(quote, unknown))}" if unknown

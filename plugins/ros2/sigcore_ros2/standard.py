@@ -84,7 +84,7 @@ class StandardEndpoints:
         self._owned: dict[str, list[str]] = {}  # robot -> its topics
         self._timed_out: set[str] = set()  # robots whose cmd_vel timeout was logged (once each)
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
-        self.add([h.name for h in sim.agents.values() if isinstance(h, RobotObj)])
+        self.add([h.name for h in sim.entities.values() if isinstance(h, RobotObj)])
         sim.events.subscribe("scan", self._scan)
 
     def _timing(self) -> None:
@@ -100,26 +100,26 @@ class StandardEndpoints:
         """A world was loaded (the old one's robots were removed when it was unloading): the rates follow its
         timestep, /clock starts again at its time 0, its robots get their topics."""
         self._timing()
-        self.add([h.name for h in self.sim.agents.values() if isinstance(h, RobotObj)])
+        self.add([h.name for h in self.sim.entities.values() if isinstance(h, RobotObj)])
 
     # ------------------------------------------------------------------ entities added and removed
     def add(self, robots: list[str]) -> None:
         """Create the topics of ``robots`` (the world's at start, or robots added while running, each under its
-        namespace ``sim.namespace(robot)``), then rebuild the state messages."""
+        namespace ``sim.entities.namespace(robot)``), then rebuild the state messages."""
         sim, node, qos = self.sim, self.node, self.qos
         for name in robots:
             robot = sim.robot(name)
-            ns = sim.namespace(name)
+            ns = sim.entities.namespace(name)
             own = self._owned.setdefault(name, [])
             self.prefix[name] = sim.frames.prefix(name)
-            self.base[name] = self.prefix[name] + sim.urdf(name).root
-            self.joints[name] = [j.name for j in sim.urdf(name).movable_joints]
+            self.base[name] = self.prefix[name] + sim.entities.urdf(name).root
+            self.joints[name] = [j.name for j in sim.entities.urdf(name).movable_joints]
             topic = f"{ns}/{name}/joint_states"
             self.joint_pub[name] = node.create_publisher(JointState, topic, qos.state(topic))
             self.topics[topic] = "sensor_msgs/msg/JointState"
             own.append(topic)
-            if sim.robot_model(name).drive is not None:
-                sim.enable_odometry(name)
+            if sim.entities.robot_model(name).drive is not None:
+                sim.entities.enable_odometry(name)
                 topic = f"{ns}/{name}/odom"
                 self.odom_pub[name] = node.create_publisher(Odometry, topic, qos.state(topic))
                 self.topics[topic] = "nav_msgs/msg/Odometry"
@@ -130,7 +130,7 @@ class StandardEndpoints:
                 self.cmd_vel_sub[name] = sub
                 self.topics[topic] = "geometry_msgs/msg/Twist"
                 own.append(topic)
-            for lidar in sim.lidars:
+            for lidar in sim.entities.lidars:
                 if lidar.robot == name:
                     topic = f"{ns}/{lidar.robot}/{lidar.model.name}"
                     self.scan_pub[(lidar.robot, lidar.model.name)] = node.create_publisher(LaserScan, topic,
@@ -167,11 +167,11 @@ class StandardEndpoints:
         frames = sim.frames
         for name in self.joints:  # a robot's frame prefix depends on how many robots there are
             self.prefix[name] = frames.prefix(name)
-            self.base[name] = self.prefix[name] + sim.urdf(name).root
+            self.base[name] = self.prefix[name] + sim.entities.urdf(name).root
         rate = self.entity_rate
         self.entity_every = 0 if rate <= 0 or not frames.entities else max(1, round(1.0 / (rate * sim.dt)))
-        moving = [name for name in sim.odometry if name in self.odom_pub]
-        self._odom = [(sim.odometry[name], self.odom_pub[name],
+        moving = [name for name in sim.entities.odometry if name in self.odom_pub]
+        self._odom = [(sim.entities.odometry[name], self.odom_pub[name],
                        _odometry(self.prefix[name] + "odom", self.base[name], *self._covariance(name)),
                        frames.root_mode(name) == "odom") for name in moving]
         # one /tf message: odom -> root of each robot under its odometry, then each robot's joints (Frames.moving)
@@ -189,17 +189,17 @@ class StandardEndpoints:
         out = [Endpoint("/clock", "rosgraph_msgs/msg/Clock", "topic", "the transport's clock"),
                Endpoint("/tf", "tf2_msgs/msg/TFMessage", "topic",
                         "the transport's odometry, joint and entity transforms", shared=True)]
-        for name, handle in sim.agents.items():
+        for name, handle in sim.entities.items():
             if isinstance(handle, RobotObj):
                 out.append(Endpoint(f"/{name}/joint_states", "sensor_msgs/msg/JointState", "topic",
                                     f"the joint states of robot '{name}'", name, "name"))
-                if sim.robot_model(name).drive is not None:
+                if sim.entities.robot_model(name).drive is not None:
                     what = f"of the <drive> of robot '{name}'"
                     out.append(Endpoint(f"/{name}/odom", "nav_msgs/msg/Odometry", "topic", f"the odometry {what}",
                                         name, "drive", "drive"))
                     out.append(Endpoint(f"/{name}/cmd_vel", "geometry_msgs/msg/Twist", "topic",
                                         f"the cmd_vel {what}", name, "drive", "drive"))
-        for lidar in sim.lidars:
+        for lidar in sim.entities.lidars:
             out.append(Endpoint(f"/{lidar.robot}/{lidar.model.name}", "sensor_msgs/msg/LaserScan", "topic",
                                 f"the scans of <lidar name='{lidar.model.name}'> of robot '{lidar.robot}'",
                                 lidar.robot, f"lidar:{lidar.model.name}", "lidar"))
@@ -208,17 +208,17 @@ class StandardEndpoints:
     def _covariance(self, robot: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """The pose and twist covariance diagonals of ``robot``'s odometry, from its world file's ``<drive>`` and the
         odometry's noise (:mod:`sigcore.sim.odometry_covariance`)."""
-        drive = self.sim.robot_model(robot).drive
+        drive = self.sim.entities.robot_model(robot).drive
         assert drive is not None
         return odometry_covariance(drive.radius, drive.separation, drive.max_wheel_velocity,
-                                   self.sim.odometry[robot].noise)
+                                   self.sim.entities.odometry[robot].noise)
 
     # ------------------------------------------------------------------ incoming
     def _cmd_vel(self, robot: RobotObj, topic: str) -> Any:
         """The handler of ``[/ns]/<robot>/cmd_vel`` (``topic``): drive, and stop again after the drive's
         ``cmd_vel_timeout`` of simulated time without a new accepted message (0: never), like ros2_control's
         diff_drive_controller."""
-        timeout = self.sim.drive(robot.name).cmd_vel_timeout
+        timeout = self.sim.entities.drive(robot.name).cmd_vel_timeout
         steps = max(1, round(timeout / self.sim.dt)) if timeout > 0 else 0
 
         def handle(msg: Twist) -> None:
@@ -242,7 +242,7 @@ class StandardEndpoints:
                 if name not in self._timed_out:
                     self._timed_out.add(name)
                     log.info("/%s/cmd_vel: no message for %g s: wheels stopped (cmd_vel_timeout of its <drive>; "
-                             "logged once)", name, self.sim.drive(name).cmd_vel_timeout)
+                             "logged once)", name, self.sim.entities.drive(name).cmd_vel_timeout)
 
     # ------------------------------------------------------------------ outgoing
     def on_step(self, sim: Simulation) -> None:
@@ -338,7 +338,7 @@ class StandardEndpoints:
         pub.publish(data)
         publications = self.sim.publications
         if publications.raw_wanted:
-            publications.raw(*offered(pub), self.sim.stamp_ns if stamp_ns is None else stamp_ns, data)
+            publications.raw(*offered(pub), self.sim.stamp_ns() if stamp_ns is None else stamp_ns, data)
 
 
 def _odometry(frame: str, child: str, pose: tuple[float, ...], twist: tuple[float, ...]) -> CdrTemplate:

@@ -143,7 +143,7 @@ class Ros2Transport(Transport):
         if config.sigros:
             out += [Endpoint(entry.name_for(agent), entry.ros_type,
                              "service" if entry.direction == "service" else "topic",
-                             f"'{entry.suffix}' of {sim.agents[agent].kind} '{agent}'", agent, "name")
+                             f"'{entry.suffix}' of {sim.entities[agent].kind} '{agent}'", agent, "name")
                     for entry, agent in SigRosEndpoints.plan(sim, agents)]
             out += [Endpoint(name, entry.ros_type, "service" if entry.direction == "service" else "topic",
                              f"the transport's shared '{entry.suffix}' (every agent, by the request's name)")
@@ -211,7 +211,7 @@ class Ros2Transport(Transport):
         receiver = Receiver(self._context)
         self._receiver = receiver
         # the node's own parameter and type description services, answered between steps like the others
-        self.node_services = NodeServices(node, receiver, lambda: sim.stamp_ns)
+        self.node_services = NodeServices(node, receiver, lambda: sim.stamp_ns())
         self.sigros = SigRosEndpoints(sim, node, receiver, qos, agents) if config.sigros else None
         with sim.events.owned_by(self):  # what they subscribe goes with the transport (stop)
             self.standard = StandardEndpoints(sim, node, receiver, qos, config) if config.standard else None
@@ -310,7 +310,7 @@ class Ros2Transport(Transport):
         self._ready.publish(data)
         sim = self._sim
         if sim is not None and sim.publications.raw_wanted:
-            sim.publications.raw(*offered(self._ready), sim.stamp_ns, data)
+            sim.publications.raw(*offered(self._ready), sim.stamp_ns(), data)
 
     # ------------------------------------------------------------------ entities added and removed
     def _selected(self, agent: str) -> bool:
@@ -337,10 +337,10 @@ class Ros2Transport(Transport):
                 self.standard.remove([name for name in change.removed if name in self.standard.joints])
         if change.added:
             if self.sigros is not None:
-                self.sigros.add([name for name in change.added if name in sim.agents and self._selected(name)])
+                self.sigros.add([name for name in change.added if name in sim.entities and self._selected(name)])
             if self.standard is not None:
-                self.standard.add([name for name in change.added if sim.agents.get(name) is not None
-                                   and sim.agents[name].kind == "robot"])
+                self.standard.add([name for name in change.added if sim.entities.get(name) is not None
+                                   and sim.entities[name].kind == "robot"])
         elif self.standard is not None:
             self.standard.rebuild()
         self._collect_endpoints()
@@ -358,13 +358,13 @@ class Ros2Transport(Transport):
         if change.kind == "unloading":
             self.interfaces.fail_waiters(f"the world '{change.world.name}' was unloaded (load_world / unload_world)")
             if self.sigros is not None:
-                self.sigros.remove(list(sim.agents), "the world was unloaded while the request was held")
+                self.sigros.remove(list(sim.entities), "the world was unloaded while the request was held")
             if self.standard is not None:
                 self.standard.remove(list(self.standard.joints))
         else:
             self.interfaces.world_loaded()
             if self.sigros is not None:
-                self.sigros.add([name for name in sim.agents if self._selected(name)])
+                self.sigros.add([name for name in sim.entities if self._selected(name)])
             if self.standard is not None:
                 self.standard.world_loaded()
                 self.standard.publish_clock()

@@ -1,7 +1,7 @@
 """The simulation_interfaces world services: get_available_worlds, get_current_world, load_world, unload_world.
 
-The core lists, parses, loads and unloads (``sigcore.world.catalogue``, ``Simulation.load_world`` /
-``unload_world``); this module maps requests, sources and refusal codes. What the transport does when the world
+The core lists, parses, loads and unloads (``sigcore.world.catalogue``, ``sim.worlds.load`` /
+``unload``); this module maps requests, sources and refusal codes. What the transport does when the world
 changes (endpoints, /clock, state) follows the ``world`` event of ``sim.events`` (``Ros2Transport._world_changed``),
 so a world loaded by a library user is served the same way.
 
@@ -86,7 +86,7 @@ class WorldServices:
     # ------------------------------------------------------------------ services: (request, response, reply)
     # Each fills ``response`` and returns False (answered at once), like SimInterfaces' own.
     def get_available_worlds(self, req: Any, res: Any, reply: Any) -> bool:
-        """The loadable worlds (``Simulation.available_worlds``) passing ``req.filter``; ``additional_sources`` are
+        """The loadable worlds (``sim.worlds.available``) passing ``req.filter``; ``additional_sources`` are
         local files or folders (paths or ``file://`` URIs). A default source that failed (a ``--worlds`` path or a
         plugin's that is gone) is DEFAULT_SOURCES_FAILED, an additional one OPERATION_FAILED, unless
         ``continue_on_error`` (then OK with the problems in ``error_message``, if any world was found).
@@ -103,7 +103,7 @@ class WorldServices:
                 paths.append(local_source(str(source)))
             except ValueError as e:
                 refused.append(str(e))
-        worlds, problems = self.sim.available_worlds(paths)
+        worlds, problems = self.sim.worlds.available(paths)
         extra = set(find_worlds([(Path(p), "request") for p in paths])[1])
         extra_problems = refused + [p for p in problems if p in extra]
         default_problems = [p for p in problems if p not in extra]
@@ -126,7 +126,7 @@ class WorldServices:
 
     def get_current_world(self, req: Any, res: Any, reply: Any) -> bool:
         """The loaded world (NO_WORLD_LOADED when none)."""
-        if not self.sim.loaded:
+        if not self.sim.worlds.loaded:
             res.result = Result(result=GetCurrentWorld.Response.NO_WORLD_LOADED, error_message=NO_WORLD)
             return False
         res.world = self.resource(self.sim.world)
@@ -146,7 +146,7 @@ class WorldServices:
         uri, text = str(req.uri), str(req.resource_string)
         sim = self.sim
         try:
-            world = open_world(uri, text, sim.available_worlds()[0], base=sim.world if sim.loaded else None)
+            world = open_world(uri, text, sim.worlds.available()[0], base=sim.world if sim.worlds.loaded else None)
         except WorldRefusal as refusal:
             raise _load_refusal(refusal, req) from None
         try:
@@ -166,7 +166,7 @@ class WorldServices:
         """
         if self.sim.control.stopping:
             raise Refusal(Result.RESULT_OPERATION_FAILED, "unload_world refused: the simulation is quitting")
-        if not self.sim.loaded:
+        if not self.sim.worlds.loaded:
             res.result = Result(result=UnloadWorld.Response.NO_WORLD_LOADED, error_message=NO_WORLD)
             return False
         self.sim.inputs.unload_world()

@@ -103,7 +103,7 @@ class SlamFeature(Feature):
         if cfg.agent not in robots:
             raise FieldError("agent", f"'{cfg.agent}' is not a robot of this world; robots: "
                                       f"{', '.join(robots) or 'none'}")
-        model = sim.robot_model(cfg.agent)
+        model = sim.entities.robot_model(cfg.agent)
         if model.drive is None:
             raise FieldError("agent", f"robot '{cfg.agent}' has no <drive>; SLAM needs its wheel odometry")
         lidars = [lidar.name for lidar in model.lidars]
@@ -115,13 +115,14 @@ class SlamFeature(Feature):
         self.config = cfg
         self.robot = cfg.agent
         self.lidar = name
-        self.sensor: LidarSensor = next(s for s in sim.lidars if s.robot == self.robot and s.model.name == name)
-        self.base_frame = sim.urdf(self.robot).root
+        self.sensor: LidarSensor = next(s for s in sim.entities.lidars
+                                        if s.robot == self.robot and s.model.name == name)
+        self.base_frame = sim.entities.urdf(self.robot).root
         self.base_to_lidar = _relative_pose(sim, self.robot, self.sensor.model.link)
         angles = self.sensor.angle_min + self.sensor.increment * np.arange(self.sensor.model.beams)
         self._directions = np.stack([np.cos(angles + self.base_to_lidar.yaw),
                                      np.sin(angles + self.base_to_lidar.yaw)], axis=1)
-        self._odometry = sim.enable_odometry(self.robot, cfg.odometry_noise)
+        self._odometry = sim.entities.enable_odometry(self.robot, cfg.odometry_noise)
         self._matcher = ScanMatcher(cfg.voxel_size, cfg.max_points_per_voxel, 0.0, self.sensor.model.range[1] + 1.0)
         width = math.ceil(cfg.size[0] / cfg.resolution - 1e-9)
         height = math.ceil(cfg.size[1] / cfg.resolution - 1e-9)

@@ -326,7 +326,7 @@ def load(path: Path, workdir: Path, stop: Callable[[], bool] | None = None) -> R
         _spawn_recorded(sim, info, facts.get("inputs", INPUTS), path)
         layout = layout_of(sim)
         base = sim.backend.get_poses(layout.parts) if layout.parts else np.empty((0, 7))
-        kinds = {name: sim.agents[name].kind for name in sim.entity_names if name in sim.agents}
+        kinds = {name: sim.entities[name].kind for name in sim.entities.names if name in sim.entities}
         robots = {name for name, kind in kinds.items() if kind == "robot"}
         shown = [p for p in sim.publications.declared if p.display is not None]
         overlays = [p for p in sim.publications.declared if p.msg_type in (_SCAN, _GRID)]
@@ -358,7 +358,7 @@ def _spawn_recorded(sim: Any, info: BagInfo, inputs_topic: str, path: Path) -> N
             if item.kind != "spawn" or "requests" not in item.args:
                 continue
             requests = [spawn_request_of(r) for r in item.args["requests"]]
-            for outcome in sim.spawn(requests):
+            for outcome in sim.entities.spawn(requests):
                 if not isinstance(outcome, str):
                     log.warning("viewer: %s: an entity spawned at %.3f s is not drawn: %s", path, t_ns / 1e9,
                                 outcome)

@@ -90,7 +90,7 @@ class SceneLayout:
 def layout_of(sim: Simulation | None) -> SceneLayout:
     """The layout of ``sim``'s scene now (an empty one without a world)."""
     layout = SceneLayout()
-    if sim is None or not sim.loaded:
+    if sim is None or not sim.worlds.loaded:
         return layout
     lows, highs = [], []
     for name, entity in sim.scene.entities.items():

@@ -90,7 +90,7 @@ class Snapshot:
     """What the browser shows at one moment, taken on the simulation thread between two steps.
 
     Attributes:
-        step: The step the poses belong to (``sim.elapsed_steps``).
+        step: The step the poses belong to (``sim.worlds.elapsed_steps``).
         time: Its simulated time [s] (of the loaded world).
         wall: ``time.perf_counter()`` when it was taken [s].
         layout: The scene's frames and visuals when they changed (a spawn, a delete, another world), else None.
@@ -613,7 +613,7 @@ class WebViewer(Viewer):
         self._next_snapshot = self._due = 0.0  # show the effect at once
 
     def _note(self, text: str) -> None:
-        stamp = self._sim.time if self._sim is not None and self._sim.loaded else 0.0
+        stamp = self._sim.time if self._sim is not None and self._sim.worlds.loaded else 0.0
         self._notes.append(f"t = {stamp:.2f} s: {text}")
         del self._notes[:-5]
 
@@ -628,7 +628,7 @@ class WebViewer(Viewer):
         assert sim is not None
         wall = time.perf_counter()
         layout = None
-        if not sim.loaded:
+        if not sim.worlds.loaded:
             if force_layout or self._layout_key != UNLOADED or self._layout is None:  # once, not at every update
                 self._layout, self._layout_key = layout_of(None), UNLOADED
                 layout = self._layout
@@ -638,14 +638,14 @@ class WebViewer(Viewer):
                 self._layout, self._layout_key = layout_of(sim), key
                 layout = self._layout
         assert self._layout is not None
-        poses = sim.backend.get_poses(self._layout.parts) if sim.loaded else np.empty((0, 7))
+        poses = sim.backend.get_poses(self._layout.parts) if sim.worlds.loaded else np.empty((0, 7))
         control = sim.control
-        self._rtf_window.append((wall, sim.elapsed_time))
+        self._rtf_window.append((wall, sim.worlds.elapsed_time))
         while len(self._rtf_window) > 2 and wall - self._rtf_window[0][0] > 2.0:
             self._rtf_window.pop(0)
         (w0, t0), (w1, t1) = self._rtf_window[0], self._rtf_window[-1]
         rtf = (t1 - t0) / (w1 - w0) if w1 - w0 > 0.2 else float("nan")
-        state = ("no world loaded" if not sim.loaded else "stopping" if control.stopping else
+        state = ("no world loaded" if not sim.worlds.loaded else "stopping" if control.stopping else
                  "paused" if control.paused else
                  f"running ({pace_name(control.realtime_factor)})")
         rtf_text = "–" if math.isnan(rtf) else f"{rtf:.2f}"
@@ -659,10 +659,10 @@ class WebViewer(Viewer):
             "selection": self._describe(sim, self._selected),
             "notes": "  \n".join(reversed(self._notes)),
         }
-        snap = Snapshot(sim.elapsed_steps, sim.time, wall, layout, poses, status, texts,
-                        list(sim.agents) if sim.loaded else [],
-                        list(sim.entity_names) if sim.loaded else [], pace=pace_name(control.realtime_factor))
-        if sim.loaded:
+        snap = Snapshot(sim.worlds.elapsed_steps, sim.time, wall, layout, poses, status, texts,
+                        list(sim.entities) if sim.worlds.loaded else [],
+                        list(sim.entities.names) if sim.worlds.loaded else [], pace=pace_name(control.realtime_factor))
+        if sim.worlds.loaded:
             if self._overlays["scan"]:
                 snap.scan = self._scan_points(poses)
             if self._overlays["contacts"]:
@@ -685,9 +685,9 @@ class WebViewer(Viewer):
         """The state of the selected entity (pose, velocity, tags, who grasps it, joint angles)."""
         if name is None:
             return "click an entity, or pick one above"
-        if not sim.loaded or name not in sim.agents:
+        if not sim.worlds.loaded or name not in sim.entities:
             return f"{quote(name)} is gone (deleted, or another world)"
-        handle = sim.agents[name]
+        handle = sim.entities[name]
         lines = [f"**{name}** ({handle.kind})"]
         try:
             pos, quat = sim.backend.get_pose(name)
@@ -699,13 +699,13 @@ class WebViewer(Viewer):
             lines.append(f"velocity: {v[0]:.3f} {v[1]:.3f} {v[2]:.3f} m/s")
         except ApiError:
             pass
-        info = sim.info.get(name) if name in sim.info.names else None
+        info = sim.entities.info.get(name) if name in sim.entities.info.names else None
         if info is not None:
             lines.append(f"category: {info.category}; tags: {', '.join(info.tags) or 'none'}")
-        held = sim.grasps.held_by(name)
+        held = sim.entities.grasps.held_by(name)
         if held is not None:
             lines.append(f"grasped by: {held[0]} ({held[1]})")
-        holding = [f"{obj} in {part}" for robot, part, obj in sim.grasps.items() if robot == name]
+        holding = [f"{obj} in {part}" for robot, part, obj in sim.entities.grasps.items() if robot == name]
         if holding:
             lines.append(f"holding: {', '.join(holding)}")
         if isinstance(handle, RobotObj):
@@ -723,7 +723,7 @@ class WebViewer(Viewer):
         """A marker at each part touching another entity (the floor contacts of wheels and casters left out)."""
         points = []
         for entity, part, other in sim.contact_triples():
-            if other == "ground" and sim.agents[entity].kind == "robot" and part in sim.rolling_parts(entity):
+            if other == "ground" and sim.entities.is_robot(entity) and part in sim.entities.rolling_parts(entity):
                 continue
             try:
                 pos, _ = sim.backend.get_pose(entity, None if part == "main" else part)
@@ -739,7 +739,7 @@ class WebViewer(Viewer):
     def _move_command(self, name: str, position: Any, wxyz: Any) -> Command:
         def run(sim: Simulation) -> str | None:
             note = move_entity(name, np.asarray(position, dtype=float), np.asarray(wxyz, dtype=float))(sim)
-            if note is not None and name in sim.agents:
+            if note is not None and name in sim.entities:
                 self._send(("selected", name, self._drag_pose(sim, name)))  # the handle goes back where it is
             return note
         return run
@@ -754,8 +754,8 @@ class WebViewer(Viewer):
 
     def select(self, sim: Simulation, name: str) -> str | None:
         """Select entity ``name`` (its state is shown and the drag handle attached to it)."""
-        if name not in sim.agents:
-            return f"no entity {quote(name)} to select; entities: {', '.join(sim.entity_names) or 'none'}"
+        if name not in sim.entities:
+            return f"no entity {quote(name)} to select; entities: {', '.join(sim.entities.names) or 'none'}"
         self._selected = name
         self._send(("selected", name, self._drag_pose(sim, name)))
         return None
@@ -846,7 +846,7 @@ def step(n: Any) -> Command:
 
 
 def reset(sim: Simulation) -> str | None:
-    held = sim.grasps.items() if sim.loaded else []
+    held = sim.entities.grasps.items() if sim.worlds.loaded else []
     try:
         sim.control.request_reset()
     except RunStateError as e:
@@ -872,9 +872,9 @@ def send_message(agent: str, text: str) -> Command:
             return "pick an agent to send the message to"
         if not text.strip():
             return "type a message first"
-        if agent not in sim.agents:
+        if agent not in sim.entities:
             return (f"agent {quote(agent)} no longer exists: the message was not sent; agents: "
-                    f"{', '.join(sim.agents) or 'none'}")
+                    f"{', '.join(sim.entities) or 'none'}")
         sim.inputs.message(VIEWER_SENDER, agent, text)
         return f"sent to {agent}: {clip(text, 80)}"
     return run
@@ -883,7 +883,7 @@ def send_message(agent: str, text: str) -> Command:
 def move_entity(name: str, position: np.ndarray, wxyz: np.ndarray) -> Command:
     """Teleport ``name`` through the API entries ``_setPosition`` and ``_setRotation`` (what a ROS client calls)."""
     def run(sim: Simulation) -> str | None:
-        if name not in sim.agents:
+        if name not in sim.entities:
             return f"{quote(name)} no longer exists: nothing was moved"
         model = next((e for e in sim.world.entities if e.name == name), None)
         if isinstance(model, Object) and model.static:
@@ -896,7 +896,7 @@ def move_entity(name: str, position: np.ndarray, wxyz: np.ndarray) -> Command:
                     "numbers, the quaternion non-zero")
         requests = [("_setPosition", {"name": name, "x": p[0], "y": p[1], "z": p[2]}),
                     ("_setRotation", {"name": name, "qw": q[0], "qx": q[1], "qy": q[2], "qz": q[3]})]
-        if isinstance(model, Object) and sim.mode(name, "dynamics"):  # put down at rest, not thrown
+        if isinstance(model, Object) and sim.entities.mode(name, "dynamics"):  # put down at rest, not thrown
             requests += [("_setVelocity", {"name": name}), ("_setAngularVelocity", {"name": name})]
         for suffix, request in requests:
             answer = call(sim, entries[suffix], name, request)
