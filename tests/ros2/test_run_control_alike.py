@@ -5,7 +5,8 @@ counts.
 Both runs are driven in lockstep from the test thread, which plays the simulation thread as ``sigcore.sim.run``
 does: it services the client's side (the viewer, or the ROS 2 transport with a client in another process) until the
 next verb arrives (a ``control`` event), then takes a fixed number of loop passes without servicing anything, so the
-step counts do not depend on timing."""
+step counts do not depend on timing. The next verb is sent only after those passes (the viewer's next button press;
+the ROS 2 client waits for "go" on its standard input), so two verbs never arrive in one servicing."""
 
 from __future__ import annotations
 
@@ -45,9 +46,10 @@ TIMEOUT = 30.0
 """Wall seconds a verb may take to arrive (milliseconds here; generous for a loaded CI)."""
 
 
-def drive(sim: Simulation, service: Callable[[], None], verbs: int) -> list[tuple[tuple[object, ...], int]]:
-    """Service until each of ``verbs`` verbs arrives, then take its passes: the verbs seen, with the step count
-    after their passes."""
+def drive(sim: Simulation, service: Callable[[], None], verbs: int,
+          passed: Callable[[], None] = lambda: None) -> list[tuple[tuple[object, ...], int]]:
+    """Service until each of ``verbs`` verbs arrives, then take its passes and call ``passed`` (the client may send
+    the next verb): the verbs seen, with the step count after their passes."""
     changes: list[ControlChange] = []
     sim.events.subscribe("control", changes.append)
     seen: list[tuple[tuple[object, ...], int]] = []
@@ -62,6 +64,8 @@ def drive(sim: Simulation, service: Callable[[], None], verbs: int) -> list[tupl
                 sim.step()
         state = astuple(change)
         seen.append(((state[0], state[1], state[2], state[5]), sim.step_count))
+        if len(seen) < verbs:
+            passed()
     assert len(changes) == verbs  # nothing else changed the run state
     return seen
 
@@ -104,9 +108,16 @@ def test_viewer_and_simulation_interfaces_drive_the_run_control_alike(monkeypatc
 
     sim, transport, env = start_in_process(monkeypatch, WORLD)
     proc = subprocess.Popen([sys.executable, str(CLIENTS / "run_control.py")], env=env, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True)
+
+    def go() -> None:
+        assert proc.stdin is not None
+        proc.stdin.write("go\n")
+        proc.stdin.flush()
+
     try:
-        by_ros = drive(sim, lambda: transport.service(0.01), len(EXPECTED))
+        by_ros = drive(sim, lambda: transport.service(0.01), len(EXPECTED), go)
         deadline = time.monotonic() + TIMEOUT
         while proc.poll() is None and time.monotonic() < deadline:
             transport.service(0.01)  # the last answer goes out

@@ -269,7 +269,8 @@ class Ros2Transport(Transport):
         self._filter.summary(log)
 
     def stop(self) -> None:
-        """Answer what is still held, announce not-ready, and close every endpoint."""
+        """Announce not-ready (and wait, briefly, until its subscribers have it), then answer what is still held, and
+        close every endpoint: a client whose request fails because the run ended already knows that it ended."""
         if self._context is None:
             return
         try:
@@ -281,10 +282,15 @@ class Ros2Transport(Transport):
             self._receiver.drain()
             if self.standard is not None and self.standard.clock_behind:
                 self.standard.publish_clock()  # the final time
+            self._announce(False)
+            from rclpy.duration import Duration
+
+            if not self._ready.wait_for_all_acked(Duration(nanoseconds=int(FLUSH_TIMEOUT * 1e9))):
+                log.warning("some subscribers of %s did not acknowledge 'false' within %g s", READY_TOPIC,
+                            FLUSH_TIMEOUT)
             self.interfaces.fail_waiters("the simulation stopped")
             if self.sigros is not None:
                 self.sigros.refuse_held("the simulation stopped")
-            self._announce(False)
         finally:
             self.action.closing = True
             self._receiver.stop()
