@@ -38,6 +38,9 @@ class Backend(ABC):
 
     name: ClassVar[str]
     """Registry name, e.g. ``"mujoco"``."""
+    replay_tolerance: ClassVar[float] = 1e-6
+    """How far a replay's poses may be from the recorded ones [m, and unit quaternion components] (``sigcore
+    replay``): 0.0 for an engine that is deterministic to the bit on one machine; a backend states its own."""
 
     # ------------------------------------------------------------------ life cycle
     @abstractmethod

@@ -781,11 +781,6 @@ def worlds_cmd(
         raise typer.Exit(2)
 
 
-REPLAY_TOLERANCE = {"mujoco": 0.0, "bullet": 1e-6}
-"""How far a replay's poses may be from the recorded ones [m, and unit quaternion components]: MuJoCo is
-deterministic to the bit; PyBullet's tolerance is stated, not assumed."""
-
-
 def _eval_command() -> None:
     from .cli_eval import eval_command
 
@@ -812,53 +807,34 @@ def replay(
     applied again (API calls, velocities, resets, entity states, spawns, deletes, entity information); a run that
     loaded or unloaded a world is refused before it runs. --until STEP stops there and hands the paused simulation
     to live clients, so a failed episode can be inspected where it went wrong."""
-    from itertools import takewhile
-
-    from .record.replay import Replayer, ReplayError, describe_inputs, load_recording
+    from .record.replay import ReplayError, describe_inputs, load_recording, plan_replay
     from .record.verify import ReplayCheck
     from .sim import Simulation
     from .sim import run as run_sim
-    from .sim.inputs import refusal
 
     try:
         rec = load_recording(path)
         world = rec.world()
+        plan = plan_replay(rec, until)
     except ReplayError as e:
         raise _fail([f"sigcore replay: {e}"]) from None
-    final = rec.final_step
-    target = final if until is None else until
-    load = next((i for i in rec.inputs if i.kind == "world"), None)  # --until counts the first world's steps
-    if until is not None and load is not None and until > load.step:
-        raise _fail([f"sigcore replay: --until {until}: the run's first world ended at step {load.step}, where it "
-                     f"applied '{load.args.get('what') or 'world'}' (world loads are not replayed); --until "
-                     f"{load.step} replays up to it"])
-    if target > final:
-        raise _fail([f"sigcore replay: --until {until}: the recording ends at step {final} "
-                     f"(t = {final * float(rec.facts['timestep']):.3f} s)"])
-    # the commands applied before the target, in the log's order (a world load would restart the step count: the
-    # whole run's replay stops at one wherever it is)
-    applied = list(takewhile(lambda i: i.step < target, rec.inputs))
-    blocked = next((why for i in applied if (why := refusal(i)) is not None), None)
-    if blocked is None and until is None:
-        blocked = next((why for i in rec.inputs if i.kind == "world" and (why := refusal(i)) is not None), None)
-    if blocked is not None:
-        raise _fail([f"sigcore replay: {blocked}"])
+    target, final = plan.target, plan.final
     handover = _transport(transport) if until is not None else None
-    backend = rec.facts.get("backend", "mujoco")
+    backend = rec.backend
     try:
         sim = Simulation(world, backend, rec.controllers)
     except SigcoreError as e:
         raise _fail([f"sigcore replay: cannot build the recorded world on '{backend}': {e}"]) from None
-    if sim.step_count != rec.start_step:
-        raise _fail([f"sigcore replay: the recording starts at step {rec.start_step}, a new simulation at "
-                     f"{sim.step_count}"])
+    try:
+        plan.check_start(rec, sim)
+    except ReplayError as e:
+        raise _fail([f"sigcore replay: {e}"]) from None
     kinds = ", ".join(f"{n} {k}" for k, n in describe_inputs(rec.inputs).items()) or "none"
     drawn = f", drawn with seed {rec.seed}" if rec.seed is not None and world.randomize is not None else ""
     out.print(f"sigcore {__version__}: replaying {path} (world '{sim.world.name}'{drawn}, backend '{backend}') to "
               f"step {target} of {final}; recorded commands: {kinds}")
-    whole = until is None  # the commands of the last step came after it: applied when the replay stops there
-    replayer = Replayer(rec.inputs, until=None if whole else target, end=final if whole else None)
-    check = ReplayCheck(rec.truth, rec.topics, target, whole, REPLAY_TOLERANCE.get(backend, 1e-6), sim.dt)
+    replayer = plan.replayer(rec)
+    check = ReplayCheck(rec.truth, rec.topics, target, plan.whole, sim.backend.replay_tolerance, sim.dt)
     check.attach(sim)
     api_log = logging.getLogger("sigcore.api")
     level = api_log.level

@@ -427,7 +427,8 @@ def test_a_seeded_recording_replays_bitwise(tmp_path: Path, world: World) -> Non
     """`run --seed 3 --record` stores the seed in the `sigcore` metadata; the recording's world (as `sigcore replay`
     and the viewer's playback rebuild it) is the drawn one, its ground truth starts at the drawn poses, and
     `sigcore replay` reproduces the end bit for bit; the world as written does not (the comparison can fail)."""
-    from sigcore.record.replay import Recording, Replayer, compare, load_recording, poses_now
+    from sigcore.record.reader import open_recording
+    from sigcore.record.replay import Replayer, compare, load_recording, poses_now
 
     bag = tmp_path / "bag"
     r = sigcore("run", str(RANDOM), "--seed", "3", "--steps", "300", "--transport", "none", "--record", str(bag),
@@ -437,7 +438,7 @@ def test_a_seeded_recording_replays_bitwise(tmp_path: Path, world: World) -> Non
     assert (rec.facts["seed"], rec.facts["noise_seed"], rec.seed) == ("3", "3", 3)
     drawn = apply_seed(world, 3)
     assert rec.world(tmp_path / "w").model_dump() == drawn.model_dump()
-    viewer = Recording(bag, rec.info, rec.facts, rec.attachments, [])  # as the viewer's playback builds it
+    viewer = open_recording(bag)  # as the viewer's playback opens it
     assert viewer.world(tmp_path / "v").model_dump() == drawn.model_dump()
     step, start = rec.truth[0]
     assert step == 0 and np.allclose(start["ground_truth/can_0"][:3], _entity(drawn, "can_0").pose.xyz)

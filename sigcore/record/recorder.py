@@ -38,11 +38,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .. import __version__
-from ..errors import SigcoreError
 from ..publish import OFFERED, Offered, Publication, PublicationSink
 from ..sim.inputs import Input
 from ..world.urdf import resolve_mesh
-from .bag import BagError, BagWriter
+from .bag import BagWriter
+from .exceptions import BagError, RecordError
 from .serialize import SerializeError, Serializer
 
 if TYPE_CHECKING:
@@ -62,10 +62,6 @@ _TF = "tf2_msgs/msg/TFMessage"
 _MESH_TYPES = {".stl": "model/stl", ".obj": "model/obj", ".dae": "model/vnd.collada+xml"}
 _ROS_ORDER = [0, 1, 2, 4, 5, 6, 3]
 """From a backend's pose (x, y, z, qw, qx, qy, qz) to a transform's (x, y, z, qx, qy, qz, qw)."""
-
-
-class RecordError(SigcoreError, ValueError):
-    """A recording cannot start: a bad ``--record-topics`` pattern or rate, a directory that exists."""
 
 
 class Recorder(PublicationSink):

@@ -15,9 +15,7 @@ referee's score, events and result, are reproduced bit for bit (:mod:`sigcore.re
 
 from __future__ import annotations
 
-import json
 import logging
-import tempfile
 from dataclasses import dataclass, field
 from itertools import takewhile
 from pathlib import Path
@@ -25,12 +23,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..sim.inputs import Input, ReplayError
+from ..sim.inputs import Input, ReplayError, refusal
 from ..transport import Transport
-from ..world.randomize import sample
-from .bag import BagError, BagInfo, bag_info, read_extras
-from .recorder import GROUND_TRUTH, INPUTS, _TfLayout, truth_frames
-from .serialize import Serializer
+from .reader import RecordingFile, TruthReader, decode_input, open_recording
+from .recorder import truth_frames
 from .verify import COMPARED_TOPICS
 
 if TYPE_CHECKING:
@@ -38,23 +34,20 @@ if TYPE_CHECKING:
     from ..api.table import ApiEntry
     from ..sim.events import Subscription
     from ..sim.simulation import Simulation
-    from ..world import World
 
 log = logging.getLogger("sigcore.record")
 
-__all__ = ["Recording", "ReplayError", "Replayer", "compare", "decode_input", "describe_inputs", "load_recording",
-           "poses_now"]
+__all__ = ["Recording", "ReplayError", "ReplayPlan", "Replayer", "compare", "describe_inputs", "load_recording",
+           "plan_replay", "poses_now"]
 
 
 @dataclass
-class Recording:
-    """What a replay needs from a recording (:func:`load_recording`)."""
+class Recording(RecordingFile):
+    """What a replay needs from a recording (:func:`load_recording`): the file (:class:`RecordingFile`), its input
+    log, its ground truth and the messages of the compared topics."""
 
-    path: Path
-    info: BagInfo
-    facts: dict[str, str]
-    attachments: dict[str, bytes]
-    inputs: list[Input]
+    inputs: list[Input] = field(default_factory=list)
+    """Every command applied from outside, in the order applied."""
     truth: list[tuple[int, dict[str, np.ndarray]]] = field(default_factory=list)
     """Every ground-truth message in the order written: (step, child frame -> x, y, z, qw, qx, qy, qz)."""
     topics: dict[str, list[tuple[int, bytes]]] = field(default_factory=dict)
@@ -62,167 +55,100 @@ class Recording:
     that the recording holds: topic -> [(log time [ns], CDR bytes)] in the order written."""
 
     @property
-    def start_step(self) -> int:
-        return int(self.facts.get("start_step", "0"))
-
-    @property
     def final_step(self) -> int:
         """The run's last step (that of the last ground truth, written when the run ended)."""
         return self.truth[-1][0] if self.truth else self.start_step
 
-    @property
-    def controllers(self) -> dict[str, str]:
-        return dict(json.loads(self.facts.get("controllers") or "{}"))
-
-    @property
-    def seed(self) -> int | None:
-        """The seed the run's world was drawn with (``sigcore run --seed``); None: as written."""
-        return self._integer("seed")
-
-    @property
-    def noise_seed(self) -> int | None:
-        """The seed of the run's sensor noise (``<world seed>``, or ``sigcore run --seed``); None: not recorded."""
-        return self._integer("noise_seed")
-
-    def _integer(self, fact: str) -> int | None:
-        text = self.facts.get(fact, "")
-        if text and not text.isdigit():
-            raise ReplayError(f"{self.path}: the metadata's {fact} {text!r} is not an integer >= 0")
-        return int(text) if text else None
-
-    def world(self, workdir: Path | None = None) -> World:
-        """The recorded world: its original file when it is there with the recorded content, else the attached
-        files written under ``workdir`` (a temporary folder by default); drawn with the recorded :attr:`seed` and
-        with the recorded seed of its sensor noise, as the run had it.
-
-        Raises:
-            ReplayError: the world file is not attached (naming what the recording holds), or does not parse, or
-                cannot be drawn with the recorded seed.
-        """
-        from ..world import WorldError
-
-        try:
-            world = self._parsed(workdir)
-            if self.seed is not None:
-                world = sample(world, self.seed)
-        except WorldError as e:
-            raise ReplayError(f"{self.path}: the recorded world does not load: {e}") from None
-        noise = self.noise_seed
-        if noise is not None and noise != world.seed:
-            world = world.model_copy(update={"seed": noise})
-        return world
-
-    def _parsed(self, workdir: Path | None) -> World:
-        """The recorded world file, parsed (see :meth:`world`)."""
-        from ..world import parse_world
-
-        name = self.facts.get("world_attachment", "")
-        text = self.attachments.get(name)
-        if text is None:
-            raise ReplayError(f"{self.path}: the world file is not attached ({name or 'no sigcore metadata'}); "
-                              f"attachments: {', '.join(self.attachments) or 'none'}")
-        original = Path(self.facts.get("world_file", ""))
-        if original.is_file() and original.read_bytes() == text:
-            return parse_world(original)
-        folder = Path(workdir or tempfile.mkdtemp(prefix="sigcore_replay_"))
-        for rel, data in self.attachments.items():
-            target = (folder / rel).resolve()
-            if folder.resolve() not in target.parents:
-                raise ReplayError(f"{self.path}: attachment {rel!r} would be written outside {folder}; a "
-                                  "recording's files are named under world/, without '..'")
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(data)
-        return parse_world(folder / name)
-
 
 def load_recording(path: Path) -> Recording:
-    """Read what a replay needs from the recording ``path``.
+    """Read what a replay needs from the recording ``path`` (through :func:`~sigcore.record.reader.open_recording`).
 
     Raises:
         ReplayError: the recording is cut, foreign, or was not made by ``sigcore run --record`` (naming why).
     """
-    from mcap.reader import make_reader
-
-    try:
-        info = bag_info(path)
-    except BagError as e:
-        raise ReplayError(str(e)) from None
-    if info.problems:
-        raise ReplayError(f"{path} cannot be replayed: {info.problems[0]}")
-    serializer = Serializer()
-    metadata, attachments = read_extras(info)
-    facts = metadata.get("sigcore", {})
-    if not facts:
-        raise ReplayError(f"{path} was not recorded by sigcore run --record (no 'sigcore' metadata record): it "
-                          "cannot be replayed")
-    dt_ns = round(float(facts["timestep"]) * 1e9)
+    file = open_recording(path)
+    if file.info.problems:
+        raise ReplayError(f"{path} cannot be replayed: {file.info.problems[0]}")
+    dt_ns = file.dt_ns
     inputs: list[Input] = []
     truth: list[tuple[int, dict[str, np.ndarray]]] = []
-    decode_truth = TruthDecoder(serializer)
-    compared = {t.name for t in info.topics} & set(COMPARED_TOPICS)
+    reader = TruthReader(file.serializer)
+    compared = {t.name for t in file.info.topics} & set(COMPARED_TOPICS)
     topics: dict[str, list[tuple[int, bytes]]] = {t: [] for t in compared}
-    for file in info.files:
-        with open(file, "rb") as f:
-            # in the order written (the order the commands were applied), not sorted by log time
-            for _, channel, message in make_reader(f).iter_messages(topics=[INPUTS, GROUND_TRUTH, *compared],
-                                                                    log_time_order=False):
-                if channel.topic == INPUTS:
-                    inputs.append(decode_input(serializer, message.data))
-                elif channel.topic == GROUND_TRUTH:
-                    truth.append((message.log_time // dt_ns, decode_truth(message.data, message.log_time)))
-                else:
-                    topics[channel.topic].append((message.log_time, bytes(message.data)))
-    return Recording(Path(path), info, facts, attachments, inputs, truth, topics)
+    # in the order written (the order the commands were applied), not sorted by log time
+    for topic, t_ns, data in file.messages([file.inputs_topic, file.truth_topic, *compared], written_order=True):
+        if topic == file.inputs_topic:
+            try:
+                inputs.append(decode_input(file.serializer, data))
+            except ValueError as e:
+                raise ReplayError(f"{path}: the input at {t_ns / 1e9:.3f} s does not decode: {e}") from None
+        elif topic == file.truth_topic:
+            truth.append((t_ns // dt_ns, reader.poses(data)))
+        else:
+            topics[topic].append((t_ns, bytes(data)))
+    return Recording(file.path, file.info, file.facts, file.attachments, inputs, truth, topics)
 
 
-class TruthDecoder:
-    """Decodes ``/sigcore/ground_truth`` messages into ``child frame -> (x, y, z, qw, qx, qy, qz)``.
+@dataclass(frozen=True)
+class ReplayPlan:
+    """How far a replay goes (:func:`plan_replay`).
 
-    A message of the same frames as the one before has its numbers at the same byte offsets: they are read at once
-    and the message is checked by writing it again with the recorder's layout (bytes equal: the frames, their
-    order, the stamp and the numbers are what was read); any other message is deserialized in full (a run's first
-    message, and the first after a spawn or a delete). About 100 times faster than deserializing every message.
-
-    Args:
-        serializer: Deserializes the messages that do not fit the layout of the one before.
+    Attributes:
+        target: The step the replay stops at.
+        final: The recorded run's last step.
+        whole: Whether it replays the whole run (the commands noted at its last step, which the run applied as it
+            stopped, are applied when the replay stops there).
     """
 
-    _BACKEND_ORDER = [0, 1, 2, 6, 3, 4, 5]
-    """From a transform's (x, y, z, qx, qy, qz, qw) to a backend's pose (x, y, z, qw, qx, qy, qz)."""
+    target: int
+    final: int
+    whole: bool
 
-    def __init__(self, serializer: Serializer) -> None:
-        self._serializer = serializer
-        self._layout: _TfLayout | None = None
-        self._children: list[str] = []
+    def replayer(self, recording: Recording) -> Replayer:
+        """The transport that applies the recorded commands up to :attr:`target`."""
+        return Replayer(recording.inputs, until=None if self.whole else self.target,
+                        end=self.final if self.whole else None)
 
-    def __call__(self, data: bytes, stamp_ns: int) -> dict[str, np.ndarray]:
-        """The poses one message holds (``stamp_ns``: its log time, which the recorder stamps it with)."""
-        layout = self._layout
-        if layout is not None and len(data) == layout.length and (len(data) - 4) % 8 == 0:
-            numbers = np.frombuffer(data, dtype="<f8", offset=4)
-            poses = numbers[layout.words].reshape(-1, 7)[:, self._BACKEND_ORDER]
-            if layout.pack(stamp_ns, poses) == data:
-                return dict(zip(self._children, poses, strict=True))
-        msg = self._serializer.deserialize("tf2_msgs/msg/TFMessage", data)
-        poses = np.array([[tf.transform.translation.x, tf.transform.translation.y, tf.transform.translation.z,
-                           tf.transform.rotation.w, tf.transform.rotation.x, tf.transform.rotation.y,
-                           tf.transform.rotation.z] for tf in msg.transforms], dtype=float).reshape(-1, 7)
-        self._children = [tf.child_frame_id for tf in msg.transforms]
-        parents = {tf.header.frame_id for tf in msg.transforms}
-        self._layout = _TfLayout(parents.pop(), self._children) if len(parents) == 1 else None
-        return dict(zip(self._children, poses, strict=True))
+    def check_start(self, recording: Recording, sim: Simulation) -> None:
+        """Refuse a simulation that does not start where the recorded run did.
+
+        Raises:
+            ReplayError: naming both steps.
+        """
+        if sim.step_count != recording.start_step:
+            raise ReplayError(f"the recording starts at step {recording.start_step}, a new simulation at "
+                              f"{sim.step_count}")
 
 
-def decode_input(serializer: Serializer, data: bytes) -> Input:
-    """One message of the input log (``/sigcore/inputs``: a ``std_msgs/msg/String`` holding the JSON object).
+def plan_replay(recording: Recording, until: int | None = None) -> ReplayPlan:
+    """Plan a replay of ``recording`` to its end or to step ``until``: refused before anything runs when it cannot
+    reproduce the run.
 
     Raises:
-        ValueError: the message does not decode or holds no input (``json``, ``KeyError`` as ``ValueError``).
+        ReplayError: ``until`` is past the recording's end or past its first world (world loads are not replayed),
+            or a command before the target (or, for the whole run, a world load) cannot be applied again; the message
+            says which and what would be valid.
     """
-    try:
-        return Input.from_json(json.loads(serializer.deserialize("std_msgs/msg/String", data).data))
-    except (KeyError, TypeError, AttributeError) as e:
-        raise ValueError(f"not an input: {e}") from None
+    final = recording.final_step
+    target = final if until is None else until
+    load = next((i for i in recording.inputs if i.kind == "world"), None)  # --until counts the first world's steps
+    if until is not None and load is not None and until > load.step:
+        raise ReplayError(f"--until {until}: the run's first world ended at step {load.step}, where it applied "
+                          f"'{load.args.get('what') or 'world'}' (world loads are not replayed); --until "
+                          f"{load.step} replays up to it")
+    if target > final:
+        raise ReplayError(f"--until {until}: the recording ends at step {final} "
+                          f"(t = {final * recording.dt_ns / 1e9:.3f} s)")
+    # the commands applied before the target, in the log's order (a world load would restart the step count: the
+    # whole run's replay stops at one wherever it is)
+    applied = list(takewhile(lambda i: i.step < target, recording.inputs))
+    blocked = next((why for i in applied if (why := refusal(i)) is not None), None)
+    if blocked is None and until is None:
+        blocked = next((why for i in recording.inputs if i.kind == "world" and (why := refusal(i)) is not None),
+                       None)
+    if blocked is not None:
+        raise ReplayError(blocked)
+    return ReplayPlan(target, final, until is None)
 
 
 class Replayer(Transport):

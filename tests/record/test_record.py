@@ -21,7 +21,7 @@ from rosbags.typesys import Stores, get_typestore
 
 from sigcore.publish import Publication, PublicationSink
 from sigcore.record import GROUND_TRUTH, Recorder
-from sigcore.record.bag import bag_info
+from sigcore.record.bag_reading import bag_info
 from sigcore.record.recorder import _TfLayout
 from sigcore.record.serialize import SerializeError, Serializer
 from sigcore.sim import Simulation, run

@@ -21,9 +21,11 @@ import pytest
 from mcap.reader import make_reader
 
 from sigcore.record import GROUND_TRUTH, Recorder
-from sigcore.record.bag import BagWriter, bag_info, iter_messages, read_extras
+from sigcore.record.bag import BagWriter
+from sigcore.record.bag_reading import bag_info, iter_messages, read_extras
+from sigcore.record.reader import TruthReader
 from sigcore.record.recorder import _TfLayout
-from sigcore.record.replay import Replayer, TruthDecoder, load_recording
+from sigcore.record.replay import Replayer, load_recording
 from sigcore.record.serialize import Serializer
 from sigcore.record.verify import ReplayCheck
 from sigcore.sim import Simulation, run
@@ -113,8 +115,7 @@ def test_a_pose_altered_in_the_middle_fails_the_replay_at_that_frame(task: dict[
     the difference and both poses; the frames before it are said to be reproduced."""
     index = len(task["truth"]) // 2
     stamp, data = task["truth"][index]
-    decoder = TruthDecoder(Serializer())
-    poses = decoder(data, stamp)
+    poses = TruthReader(Serializer()).poses(data)
     names = list(poses)
     original = poses[frame].copy()
     altered = np.array([poses[n] for n in names])

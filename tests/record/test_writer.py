@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from sigcore.record import Recorder
-from sigcore.record.bag import bag_info, iter_messages
+from sigcore.record.bag_reading import bag_info, iter_messages
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
 

@@ -56,7 +56,7 @@ def test_the_player_played_every_message(played: dict) -> None:
     """bag play exits 0 and says how many messages it played: all of the bag's but its /clock (none here)."""
     play = played["play"]
     assert play.returncode == 0, play.stderr
-    from sigcore.record.bag import bag_info
+    from sigcore.record.bag_reading import bag_info
 
     assert f"played {bag_info(played['bag']).messages} messages" in play.stdout
 

@@ -65,6 +65,8 @@ class BulletBackend(Backend):
     """
 
     name: ClassVar[str] = "bullet"
+    replay_tolerance: ClassVar[float] = 1e-6
+    """PyBullet's replays are stated to be within 1e-6 (not assumed bitwise)."""
 
     def __init__(self) -> None:
         self.client = -1

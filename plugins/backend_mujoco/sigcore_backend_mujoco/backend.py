@@ -69,6 +69,8 @@ class MujocoBackend(Backend):
     """
 
     name: ClassVar[str] = "mujoco"
+    replay_tolerance: ClassVar[float] = 0.0
+    """MuJoCo is deterministic to the bit: a replay reproduces every recorded pose exactly."""
 
     def __init__(self) -> None:
         self._built = False

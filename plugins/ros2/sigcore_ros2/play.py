@@ -54,7 +54,8 @@ def play_command(
 ) -> None:
     """Publish a recording on ROS 2 with /clock, at its simulated pace times --rate; --loop repeats it. Where ROS 2
     is installed, ros2 bag play DIR --clock does the same."""
-    from sigcore.record.bag import BagError, bag_info, iter_messages
+    from sigcore.record.bag_reading import bag_info, iter_messages
+    from sigcore.record.exceptions import BagError
 
     patterns = []
     for text in topics or []:

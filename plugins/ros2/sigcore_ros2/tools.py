@@ -851,7 +851,8 @@ def record_command(
                 raise RosToolError(f"--regex {quote(text)} is not a regular expression: {e}") from None
         if not (explicit or all_topics or patterns):
             raise RosToolError("nothing to record: name topics, or give --all or --regex")
-        from sigcore.record.bag import BagError, BagWriter
+        from sigcore.record.bag import BagWriter
+        from sigcore.record.exceptions import BagError
         from sigcore.record.serialize import Serializer
 
         with _Graph("record") as graph:

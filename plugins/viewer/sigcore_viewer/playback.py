@@ -27,7 +27,6 @@ import bisect
 import dataclasses
 import logging
 import math
-import struct
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,8 +36,6 @@ import numpy as np
 
 from sigcore.errors import SigcoreError
 from sigcore.geometry import quat_yaw
-from sigcore.record.recorder import GROUND_TRUTH as TRUTH
-from sigcore.record.recorder import INPUTS
 from sigcore.text import clip, quote
 from sigcore.viewer import ViewerError
 
@@ -46,7 +43,7 @@ from .scenebuild import SceneLayout, layout_of
 
 if TYPE_CHECKING:
     from sigcore.publish import Publication
-    from sigcore.record.bag import BagInfo
+    from sigcore.record.reader import RecordingFile
 
     from .viewer import Snapshot
 
@@ -60,101 +57,6 @@ LOG_SHOWN = 15
 
 _SCAN = "sensor_msgs/msg/LaserScan"
 _GRID = "nav_msgs/msg/OccupancyGrid"
-_ROS_TO_WXYZ = [0, 1, 2, 6, 3, 4, 5]
-"""From a transform's (x, y, z, qx, qy, qz, qw) to a pose (x, y, z, qw, qx, qy, qz)."""
-
-
-# ---------------------------------------------------------------------- reading the ground truth
-class TruthReader:
-    """Reads ``/sigcore/ground_truth`` messages: ``(child frame names, (n, 7) poses x y z qw qx qy qz)``.
-
-    The recorder writes every message of one scene with the same bytes but for the stamps and the numbers
-    (:class:`sigcore.record.recorder._TfLayout`): the first message of a layout is parsed field by field (CDR, XCDR1
-    little endian), and each next one whose other bytes are the same is read at the offsets found then (a recording
-    of an hour holds 100 000 of them). Anything else is decoded by the record's :class:`Serializer`.
-    """
-
-    def __init__(self) -> None:
-        self._template: np.ndarray | None = None
-        self._fixed = np.zeros(0, dtype=np.intp)
-        self._values = np.zeros(0, dtype=np.intp)
-        self._children: tuple[str, ...] = ()
-        self._serializer: Any = None
-
-    def read(self, data: bytes) -> tuple[tuple[str, ...], np.ndarray]:
-        raw = np.frombuffer(data, dtype=np.uint8)
-        template = self._template
-        if template is not None and raw.size == template.size and np.array_equal(raw[self._fixed],
-                                                                                 template[self._fixed]):
-            values = raw[self._values].view("<f8").reshape(-1, 7)
-            return self._children, values[:, _ROS_TO_WXYZ]
-        try:
-            children, poses, stamps, offsets = _parse_tf(data)
-        except (ValueError, struct.error):
-            return self._decode(data)
-        byte8, byte56 = np.arange(8), np.arange(56)
-        variable = np.concatenate([(np.asarray(stamps, dtype=np.intp)[:, None] + byte8).reshape(-1),
-                                   (np.asarray(offsets, dtype=np.intp)[:, None] + byte56).reshape(-1)])
-        fixed = np.ones(raw.size, dtype=bool)
-        fixed[variable] = False
-        self._template, self._fixed = raw.copy(), np.flatnonzero(fixed)
-        self._values = (np.asarray(offsets, dtype=np.intp)[:, None] + byte56).reshape(-1)
-        self._children = children
-        return children, poses
-
-    def _decode(self, data: bytes) -> tuple[tuple[str, ...], np.ndarray]:
-        """Any ``TFMessage`` (big endian...), through rosbags' type store."""
-        if self._serializer is None:
-            from sigcore.record.serialize import Serializer
-
-            self._serializer = Serializer()
-        msg = self._serializer.deserialize("tf2_msgs/msg/TFMessage", data)
-        names = tuple(str(tf.child_frame_id) for tf in msg.transforms)
-        poses = np.array([[tf.transform.translation.x, tf.transform.translation.y, tf.transform.translation.z,
-                           tf.transform.rotation.w, tf.transform.rotation.x, tf.transform.rotation.y,
-                           tf.transform.rotation.z] for tf in msg.transforms], dtype=float).reshape(-1, 7)
-        self._template = None
-        return names, poses
-
-
-def _parse_tf(data: bytes) -> tuple[tuple[str, ...], np.ndarray, list[int], list[int]]:
-    """A little-endian CDR ``tf2_msgs/msg/TFMessage``: child frames, poses, and the byte offsets of each
-    transform's stamp and of its seven numbers.
-
-    Raises:
-        ValueError: not little-endian CDR, or it does not parse.
-    """
-    if len(data) < 8 or data[1] != 1:
-        raise ValueError("not little-endian CDR")
-
-    def align(pos: int, n: int) -> int:
-        return pos + (-(pos - 4)) % n
-
-    (count,) = struct.unpack_from("<I", data, 4)
-    pos = 8
-    children: list[str] = []
-    stamps: list[int] = []
-    offsets: list[int] = []
-    rows: list[tuple[float, ...]] = []
-    for _ in range(count):
-        pos = align(pos, 4)
-        stamps.append(pos)
-        pos += 8
-        for which in range(2):  # header.frame_id, child_frame_id
-            pos = align(pos, 4)
-            (size,) = struct.unpack_from("<I", data, pos)
-            pos += 4
-            if size < 1 or pos + size > len(data):
-                raise ValueError("a string runs past the message")
-            if which == 1:
-                children.append(data[pos:pos + size - 1].decode())
-            pos += size
-        pos = align(pos, 8)
-        offsets.append(pos)
-        rows.append(struct.unpack_from("<7d", data, pos))
-        pos += 56
-    poses = np.array(rows, dtype=float).reshape(-1, 7)[:, _ROS_TO_WXYZ]
-    return tuple(children), poses, stamps, offsets
 
 
 # ---------------------------------------------------------------------- what a recording holds
@@ -299,31 +201,24 @@ def load(path: Path, workdir: Path, stop: Callable[[], bool] | None = None) -> R
             attached, the world does not load) or it holds no ground truth; the message names the file and what is
             missing.
     """
-    from sigcore.record.bag import BagError, bag_info, read_extras
-    from sigcore.record.replay import Recording
+    from sigcore.record.reader import open_recording
+    from sigcore.sim.inputs import ReplayError
 
     path = Path(path)
     try:
-        info = bag_info(path)
-    except BagError as e:
+        recording = open_recording(path)
+    except ReplayError as e:
         raise ViewerError(str(e)) from None
-    metadata, attachments = read_extras(info)
-    facts = metadata.get("sigcore", {})
-    if not facts:
-        raise ViewerError(f"{_files(info)} holds no 'sigcore' metadata record: it was not recorded by sigcore run "
-                          "--record, and the world to show is unknown")
-    truth_topic = facts.get("ground_truth", TRUTH)
-    if not any(t.name == truth_topic and t.count > 0 for t in info.topics):
-        raise ViewerError(f"{_files(info)} holds no ground truth (no message on {truth_topic}): there is nothing to "
-                          "show the scene with")
-    recording = Recording(path, info, facts, attachments, [])
+    if not recording.has(recording.truth_topic):
+        raise ViewerError(f"{_files(recording.info)} holds no ground truth (no message on {recording.truth_topic}): "
+                          "there is nothing to show the scene with")
     try:
         world = recording.world(workdir)
     except SigcoreError as e:
         raise ViewerError(f"the recorded world cannot be rebuilt: {e}") from None
-    sim = _scene_of(world, facts.get("backend", "mujoco"), path)
+    sim = _scene_of(world, recording.backend, path)
     try:
-        _spawn_recorded(sim, info, facts.get("inputs", INPUTS), path)
+        _spawn_recorded(sim, recording)
         layout = layout_of(sim)
         base = sim.backend.get_poses(layout.parts) if layout.parts else np.empty((0, 7))
         kinds = {name: sim.entities[name].kind for name in sim.entities.names if name in sim.entities}
@@ -335,26 +230,24 @@ def load(path: Path, workdir: Path, stop: Callable[[], bool] | None = None) -> R
         sim.cameras.close()
     names = [_truth_name(entity, part, frame, robots) for (entity, part), frame in zip(layout.parts, layout.frames,
                                                                                        strict=True)]
-    return _read(path, info, facts, layout, kinds, np.asarray(base, dtype=float), names, shown, overlays, dt_ns,
+    return _read(recording, layout, kinds, np.asarray(base, dtype=float), names, shown, overlays, dt_ns,
                  world.name, stop or (lambda: False))
 
 
-def _spawn_recorded(sim: Any, info: BagInfo, inputs_topic: str, path: Path) -> None:
+def _spawn_recorded(sim: Any, recording: RecordingFile) -> None:
     """Add to the scene every entity the run spawned (the input log's spawns, in their order), so that they are
     drawn: the ground truth shows them from their spawn on and hides them before. A spawn that cannot be rebuilt
     (a file it named is gone, a recording made before spawns were logged with their requests) is skipped: its frames
     are listed as not drawn."""
-    from sigcore.record.bag import iter_messages
-    from sigcore.record.replay import decode_input
-    from sigcore.record.serialize import Serializer
+    from sigcore.record.reader import decode_input
     from sigcore.sim.inputs import spawn_request_of
 
-    if not any(t.name == inputs_topic for t in info.topics):
+    if not recording.has(recording.inputs_topic):
         return
-    serializer = Serializer()
-    for _, t_ns, data in iter_messages(info, [inputs_topic]):
+    path = recording.path
+    for _, t_ns, data in recording.messages([recording.inputs_topic]):
         try:
-            item = decode_input(serializer, data)
+            item = decode_input(recording.serializer, data)
             if item.kind != "spawn" or "requests" not in item.args:
                 continue
             requests = [spawn_request_of(r) for r in item.args["requests"]]
@@ -367,7 +260,7 @@ def _spawn_recorded(sim: Any, info: BagInfo, inputs_topic: str, path: Path) -> N
                         t_ns / 1e9, e)
 
 
-def _files(info: BagInfo) -> str:
+def _files(info: Any) -> str:
     return ", ".join(str(f) for f in info.files) or str(info.path)
 
 
@@ -398,17 +291,15 @@ def _scene_of(world: Any, backend: str, path: Path) -> Any:
         raise ViewerError(f"{path}: the recorded world cannot be rebuilt: {e}") from None
 
 
-def _read(path: Path, info: BagInfo, facts: dict[str, str], layout: SceneLayout, kinds: dict[str, str],
-          base: np.ndarray, names: list[str | None], shown: list[Publication], overlays: list[Publication],
-          dt_ns: int, world: str, stop: Callable[[], bool]) -> Recorded:
+def _read(recording: RecordingFile, layout: SceneLayout, kinds: dict[str, str], base: np.ndarray,
+          names: list[str | None], shown: list[Publication], overlays: list[Publication], dt_ns: int, world: str,
+          stop: Callable[[], bool]) -> Recorded:
     """One pass over the messages: the ground truth, the shown publications' lines, scans and grids."""
-    from sigcore.record.bag import iter_messages
-    from sigcore.record.replay import decode_input
-    from sigcore.record.serialize import Serializer
+    from sigcore.record.reader import TruthReader, decode_input
 
-    truth_topic = facts.get("ground_truth", TRUTH)
-    inputs_topic = facts.get("inputs", INPUTS)
-    serializer = Serializer()
+    path, info = recording.path, recording.info
+    truth_topic, inputs_topic = recording.truth_topic, recording.inputs_topic
+    serializer = recording.serializer
     by_topic = {p.full_topic: p for p in shown}
     for p in shown:
         if p.model is not None:
@@ -422,7 +313,7 @@ def _read(path: Path, info: BagInfo, facts: dict[str, str], layout: SceneLayout,
     wanted = {truth_topic, inputs_topic, *by_topic, *scans, *grids} & set(recorded)
 
     frame_of = {name: i for i, name in enumerate(names) if name is not None}
-    reader = TruthReader()
+    reader = TruthReader(serializer)
     maps: dict[int, tuple[tuple[str, ...], np.ndarray, np.ndarray]] = {}  # id(children) -> (children, src, dst)
     times: list[int] = []
     rows: list[np.ndarray] = []
@@ -431,7 +322,7 @@ def _read(path: Path, info: BagInfo, facts: dict[str, str], layout: SceneLayout,
     lines = Lines()
     bad: set[str] = set()
     order = 0
-    for topic, t_ns, data in iter_messages(info, wanted):
+    for topic, t_ns, data in recording.messages(wanted):
         order += 1
         if order % 4096 == 0 and stop():
             raise Interrupted(f"{path}: reading stopped")
@@ -518,7 +409,7 @@ def _read(path: Path, info: BagInfo, facts: dict[str, str], layout: SceneLayout,
             everything += [store[0][0], store[-1][0]]
     start_ns = min(everything)
     end_ns = max(max(everything), start_ns)
-    return Recorded(path, world, facts.get("backend", "?"), dt_ns, layout, kinds, base, tracked,
+    return Recorded(path, world, recording.facts.get("backend", "?"), dt_ns, layout, kinds, base, tracked,
                     np.asarray(times, dtype=np.int64)[sort], pose_array, present_array, lines,
                     {k: v for k, v in scans.items() if v.times}, {k: v for k, v in grids.items() if v.times},
                     start_ns, end_ns, list(info.problems), untracked)

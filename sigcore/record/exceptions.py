@@ -1,0 +1,13 @@
+"""The errors of recordings."""
+
+from __future__ import annotations
+
+from ..errors import SigcoreError
+
+
+class BagError(SigcoreError, ValueError):
+    """A bag cannot be written (its directory exists, is not writable) or read (missing, cut, foreign)."""
+
+
+class RecordError(SigcoreError, ValueError):
+    """A recording cannot start: a bad ``--record-topics`` pattern or rate, a directory that exists."""
