@@ -14,15 +14,19 @@ Conventions, for every method:
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import ClassVar
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 
-from .errors import ApiError, SigcoreError
+from .errors import BackendError, BackendRefusal
 from .world.models import World
+
+if TYPE_CHECKING:
+    from .world.urdf import UrdfDocument
 
 Array = npt.NDArray[np.float64]
 
@@ -33,16 +37,112 @@ MAIN = "main"
 """Name of the single part of objects and humans; also accepted for a robot's root link."""
 
 
+T = TypeVar("T")
+
+
+def collision_urdf(urdf: UrdfDocument, what: str,
+                   check: Callable[[Path], str | None] | None = None) -> tuple[Any, list[str]]:
+    """A copy of ``urdf`` as an engine loads it (``urdf`` is not changed): comments and ``<visual>`` elements removed,
+    every mesh's file name made absolute; and its root links (those no joint has as child).
+
+    Args:
+        urdf: The URDF document (``World.urdf``).
+        what: The entity it belongs to, for messages, e.g. ``"robot 'robot_000'"``.
+        check: Says what is wrong with a mesh file the engine would choke on (None: nothing).
+
+    Raises:
+        BackendError: a collision mesh not found, or one ``check`` finds wrong, or a root link called ``world``.
+    """
+    from lxml import etree
+
+    from .world.urdf import resolve_mesh
+
+    path = urdf.path
+    root = urdf.copy_root()
+    etree.strip_tags(root, etree.Comment)
+    for visual in list(root.iter("visual")):
+        visual.getparent().remove(visual)
+    for mesh in root.iter("mesh"):
+        filename = str(mesh.get("filename", ""))
+        resolved = resolve_mesh(filename, path.parent)
+        link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
+        if resolved is None:
+            raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
+                               f"(relative paths are relative to the URDF's directory {path.parent})")
+        problem = check(resolved) if check is not None else None
+        if problem is not None:
+            raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path}: {problem}")
+        mesh.set("filename", str(resolved))
+    children = {str(c.get("link")) for c in root.iter("child")}
+    roots = [name for name in (str(e.get("name")) for e in root.findall("link")) if name not in children]
+    if roots == ["world"]:
+        raise BackendError(f"{what}: the root link of {path} is 'world'; remove the 'world' link and its "
+                           "joint, and set fixed=\"true\" on the <robot> to weld the robot to the world")
+    return root, roots
+
+
+def find_entity(entities: Mapping[str, T], name: str) -> T:
+    """The backend's index of entity ``name``.
+
+    Raises:
+        BackendRefusal: no such entity; the message lists them.
+    """
+    entity = entities.get(name)
+    if entity is None:
+        raise BackendRefusal(f"no entity '{name}'; entities: {', '.join(entities) or 'none'}")
+    return entity
+
+
+def find_part(kind: str, entity: str, index: Mapping[str, T], part: str, parts: Sequence[str]) -> T:
+    """The backend's index of part ``part`` of ``entity`` (a ``kind``) in ``index`` (part name -> index); ``parts``
+    are its part names, main part first.
+
+    Raises:
+        BackendRefusal: no such part; the message lists the valid ones (and ``main``, which a robot's root also
+            answers to).
+    """
+    found = index.get(part)
+    if found is None:
+        alias = f" (or '{MAIN}')" if kind == "robot" else ""
+        raise BackendRefusal(f"{kind} '{entity}' has no part '{part}'; parts: {', '.join(parts)}{alias}")
+    return found
+
+
+def find_joint(kind: str, entity: str, joints: Mapping[str, T], name: str) -> T:
+    """The backend's index of the movable joint ``name`` of ``entity``.
+
+    Raises:
+        BackendRefusal: no such joint; the message lists the valid ones.
+    """
+    joint = joints.get(name)
+    if joint is None:
+        raise BackendRefusal(f"{kind} '{entity}' has no movable joint '{name}'; joints: {', '.join(joints) or 'none'}")
+    return joint
+
+
 class Backend(ABC):
     """A physics engine holding one world."""
 
     name: ClassVar[str]
     """Registry name, e.g. ``"mujoco"``."""
+    title: ClassVar[str] = ""
+    """The engine's name in messages (``MuJoCo``); default: :attr:`name`."""
+    _built: bool = False
+    """Whether :meth:`build` made a world (a backend sets it)."""
     replay_tolerance: ClassVar[float] = 1e-6
     """How far a replay's poses may be from the recorded ones [m, and unit quaternion components] (``sigcore
     replay``): 0.0 for an engine that is deterministic to the bit on one machine; a backend states its own."""
 
     # ------------------------------------------------------------------ life cycle
+    def require_world(self) -> None:
+        """Refuse a call before :meth:`build` made a world.
+
+        Raises:
+            BackendError: naming the backend and what to call first.
+        """
+        if not self._built:
+            raise BackendError(f"the {self.title or self.name} backend has no world yet; call build(world) first")
+
     @abstractmethod
     def build(self, world: World) -> None:
         """Create the engine's model of ``world`` (paths in it are relative to ``world.base_dir``).
@@ -312,12 +412,3 @@ class Renderer(ABC):
         """Free the renderer's resources (on the thread that rendered); default: nothing."""
 
 
-class BackendError(SigcoreError, RuntimeError):
-    """The backend could not do what was asked; the message says why and what would be valid."""
-
-
-class BackendRefusal(BackendError, ApiError):
-    """A request on the running world that the backend refuses because of what was asked, not because the backend
-    failed: an unknown entity, part or joint, dynamics for a static object, a position target for a drive wheel,
-    a mass for a body without one. The API answers it like any refusal: one line, no traceback (an
-    :class:`~sigcore.agent.exceptions.ApiError`); it is still a :class:`BackendError` for callers of the backend."""

@@ -10,13 +10,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
 from . import __version__, cli_linger, plugins
-from .errors import SigcoreError
-from .isolation import CALLBACK_BUDGET, BudgetError, CallbackBudget
+from .cli_common import err, out
+from .cli_common import fail as _fail
+from .errors import BudgetError, SigcoreError
+from .isolation import CALLBACK_BUDGET, CallbackBudget
 from .world import WorldError, parse_world
 
 if TYPE_CHECKING:
@@ -33,8 +34,6 @@ app = typer.Typer(help="sigcore: drive a physics simulation through ROS 2 topics
                   no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
                   rich_markup_mode=None)  # help text is plain: units such as [s] stay as written
 # Markup off: what is printed comes from users (names, errors, features' lines) and is never interpreted.
-out = Console(highlight=False, soft_wrap=True, markup=False)
-err = Console(stderr=True, highlight=False, markup=False)
 
 WorldPath = Annotated[Path, typer.Argument(exists=True, dir_okay=False, readable=True, help="world XML file")]
 Controllers = Annotated[list[str] | None, typer.Option(
@@ -49,12 +48,6 @@ Seed = Annotated[str | None, typer.Option(
 
 MAX_SEED = 2**64 - 1
 """Largest ``--seed``."""
-
-
-def _fail(lines: list[str], code: int = 2) -> typer.Exit:
-    for line in lines:
-        err.print(line, markup=False, soft_wrap=True)
-    return typer.Exit(code)
 
 
 def _backend_names() -> list[str]:
@@ -111,7 +104,7 @@ def _load(world_file: Path, backend: str, controllers: list[str] | None = None, 
     """Build the simulation of ``world`` (else of the file as written); every failure is printed as what it is
     (world file, controller, feature, backend)."""
     from .agent.exceptions import ApiError
-    from .backend import BackendError
+    from .errors import BackendError
     from .sim import FeatureError, Simulation
 
     overrides: dict[str, str] = {}
@@ -156,7 +149,7 @@ def _entity_location(world: World, text: str) -> str:
 
 def _check_endpoints(transport: Transport | None, sim: Simulation) -> None:
     """Refuse (exit 2) a world whose endpoints ``transport`` cannot create: invalid or twice-used names."""
-    from .transport import TransportError
+    from .errors import TransportError
 
     if transport is None:
         return
@@ -221,7 +214,7 @@ def split_transport_args(argv: list[str]) -> tuple[list[str], list[str] | None]:
 
 def _configure(transport: Transport | None, transport_name: str | None) -> None:
     """Hand the arguments after ``--ros-args`` to the transport (exit 2 if it has none or refuses them)."""
-    from .transport import TransportError
+    from .errors import TransportError
 
     if _transport_args is None:
         return
@@ -286,7 +279,8 @@ def _video(sim: Simulation, path: Path | None, camera: str, fps: float) -> Video
     """The recorder of ``--video`` (its encoder started), or None."""
     if path is None:
         return None
-    from .sim.video import VideoError, VideoRecorder
+    from .sim.exceptions import VideoError
+    from .sim.video import VideoRecorder
 
     try:
         return VideoRecorder(sim, path, camera, fps)
@@ -311,7 +305,8 @@ def _record(sim: Simulation, path: Path | None, topics: list[str] | None, rate: 
 
 def _viewer(enabled: bool, host: str, port: int | None, rate: float) -> Viewer | None:
     """The viewer to start beside the transport (``--viewer``), listening already (its URL known), or None."""
-    from .viewer import DEFAULT_VIEWER, ViewerError
+    from .errors import ViewerError
+    from .viewer import DEFAULT_VIEWER
 
     if not enabled:
         return None
@@ -585,8 +580,8 @@ def _view_recording(path: Path, host: str, port: int | None, rate: float) -> Non
     """``sigcore view DIR``: check the recording, open the viewer, play it back until Ctrl-C."""
     import signal
 
+    from .errors import ViewerError
     from .record import BagError, bag_info
-    from .viewer import ViewerError
 
     try:
         info = bag_info(path)

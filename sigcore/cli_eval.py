@@ -9,10 +9,11 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, Task, TextColumn
 from rich.text import Text
 
+from .cli_common import err, out
+from .cli_common import fail as _fail
 from .eval import (
     DOMAINS,
     ENV,
@@ -31,20 +32,11 @@ from .eval import (
 from .eval.domains import describe
 from .eval.results import EpisodeLog
 
-out = Console(highlight=False, soft_wrap=True, markup=False)
-err = Console(stderr=True, highlight=False, markup=False, soft_wrap=True)  # one line per message, never wrapped
-
 KINDS = {"timeout": "timed out", "not_started": "not started", "solution_crashed": "solution crashed",
          "simulator_error": "simulator error"}
 
 EXIT_BELOW = 1
 """The exit code when the success rate is below ``--min-success``."""
-
-
-def _fail(lines: list[str], code: int = 2) -> typer.Exit:
-    for line in lines:
-        err.print(line, soft_wrap=True)
-    return typer.Exit(code)
 
 
 def eval_command(

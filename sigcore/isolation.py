@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import SigcoreError
+from .errors import BudgetError
 
 USER_ERRORS: tuple[type[BaseException], ...] = (Exception, SystemExit)
 """What a call into user or plugin code may raise that sigcore catches (``except USER_ERRORS``)."""
@@ -57,5 +57,3 @@ class CallbackBudget:
                               f"{self.seconds}")
 
 
-class BudgetError(SigcoreError, ValueError):
-    """A :class:`CallbackBudget` that is not a number of seconds >= 0."""

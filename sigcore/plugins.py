@@ -16,7 +16,7 @@ import importlib.metadata
 import inspect
 import logging
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 import pluggy
 
 from . import hookspecs
-from .errors import SigcoreError
+from .errors import PluginError, PluginLoadError
 from .isolation import USER_ERRORS, describe
 
 if TYPE_CHECKING:
@@ -84,39 +84,6 @@ class PluginInfo:
         """``'mujoco' (sigcore-backend-mujoco 0.1.0)``, or ``'name' (in-process)``."""
         origin = f"{self.distribution} {self.version}".strip() or "in-process"
         return f"'{self.name}' ({origin})"
-
-
-class PluginError(SigcoreError, LookupError):
-    """A name that no plugin registered; the message lists the registered names and the failed plugins.
-
-    Attributes:
-        kind: ``backend``, ``transport``, ``feature`` or ``controller``.
-        name: The name asked for.
-        available: The registered names of that kind, sorted.
-        failed: Plugins that failed to load (one of them may have provided ``name``).
-    """
-
-    def __init__(self, kind: str, name: str, available: Sequence[str],
-                 failed: Sequence[PluginInfo] = ()) -> None:
-        self.kind, self.name, self.available, self.failed = kind, name, list(available), list(failed)
-        message = f"{kind} '{name}' is not registered; available: {', '.join(self.available) or 'none'}"
-        close = difflib.get_close_matches(name, self.available, n=1)
-        if close:
-            message += f" (did you mean '{close[0]}'?)"
-        elif not self.available:
-            message += f" (install a sigcore plugin that provides a {kind}; `sigcore plugins` lists them)"
-        if self.failed:
-            failures = "; ".join(f"{i.describe()}: {i.error}" for i in self.failed)
-            message += f"; plugins that failed to load: {failures}"
-        super().__init__(message)
-
-
-class PluginLoadError(SigcoreError, RuntimeError):
-    """:func:`register_plugin` refused a plugin; ``info`` says which and why."""
-
-    def __init__(self, info: PluginInfo) -> None:
-        self.info = info
-        super().__init__(f"plugin {info.describe()} failed to load: {info.error}")
 
 
 @dataclass

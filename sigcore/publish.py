@@ -23,7 +23,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel
 
-from .errors import SigcoreError
+from .errors import PublicationError
 
 log = logging.getLogger("sigcore")
 
@@ -51,10 +51,6 @@ _SHARED = ("tf",)
 
 _TOPIC = re.compile(r"^/?[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*$")
 _TYPE = re.compile(r"^([a-z][a-z0-9_]*/msg/)?[A-Z][A-Za-z0-9]*$")
-
-
-class PublicationError(SigcoreError, ValueError):
-    """A publication cannot be declared (bad name or type, a name taken by another type) or a value pushed."""
 
 
 @dataclass(frozen=True)

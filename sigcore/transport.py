@@ -7,7 +7,7 @@ from collections.abc import Collection
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar, Literal
 
-from .errors import SigcoreError
+from .errors import TransportError
 from .world.names import full_name_problem
 
 if TYPE_CHECKING:
@@ -47,11 +47,6 @@ class Endpoint:
     def full_name(self) -> str:
         """The name resolved in the node namespace ``/``."""
         return self.name if self.name.startswith("/") else "/" + self.name
-
-
-class TransportError(SigcoreError):
-    """A transport refused what it was asked before or while starting: arguments it does not take or that are
-    wrong, a question it cannot answer. The message names what was wrong and what is valid."""
 
 
 class Transport(ABC):

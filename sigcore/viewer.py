@@ -16,7 +16,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .transport import Endpoint, Transport, TransportError
+from .errors import ViewerError
+from .transport import Endpoint, Transport
 
 if TYPE_CHECKING:
     from .sim.simulation import Simulation
@@ -30,10 +31,6 @@ DEFAULT_PORT = 8080
 
 VIEWER_SENDER = "viewer"
 """The sender of the messages a person sends to an agent from a viewer (``on_recv_msg``, ``<agent>_onRecvMsg``)."""
-
-
-class ViewerError(TransportError):
-    """A viewer cannot start as asked (e.g. its port is taken); the message names what and what would work."""
 
 
 class Viewer(Transport):

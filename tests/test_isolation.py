@@ -17,7 +17,8 @@ from types import ModuleType
 import pytest
 
 from sigcore import plugins
-from sigcore.isolation import BudgetError, CallbackBudget
+from sigcore.errors import BudgetError
+from sigcore.isolation import CallbackBudget
 from sigcore.sim import Simulation, run
 from sigcore.world import parse_world
 

@@ -9,7 +9,8 @@ from typing import Any
 import pytest
 
 from sigcore.api.table import api_table
-from sigcore.publish import Offered, Publication, PublicationError, Publications, PublicationSink
+from sigcore.errors import PublicationError
+from sigcore.publish import Offered, Publication, Publications, PublicationSink
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
 

@@ -317,7 +317,7 @@ def test_every_exception_class_derives_from_sigcore_error() -> None:
     strays = sorted(f"{c.__module__}.{c.__qualname__}" for c in classes if not issubclass(c, SigcoreError))
     assert strays == [], f"not under SigcoreError: {strays}"
     from sigcore.agent.exceptions import ApiError, ControllerError
-    from sigcore.backend import BackendError
+    from sigcore.errors import BackendError
     from sigcore.world import WorldError
 
     assert issubclass(ApiError, ValueError) and issubclass(WorldError, ValueError)

@@ -12,7 +12,8 @@ from sigcore.agent.exceptions import ApiError
 from sigcore.sim import Simulation
 from sigcore.sim.spawn import EntityChange
 from sigcore.world import parse_world
-from sigcore.world.resources import SpawnRefusal, SpawnRequest
+from sigcore.world.exceptions import SpawnRefusal
+from sigcore.world.resources import SpawnRequest
 
 ROOT = Path(__file__).resolve().parents[1]
 SIGBOT = ROOT / "worlds" / "models" / "sigbot" / "sigbot.urdf"

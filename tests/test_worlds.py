@@ -22,10 +22,10 @@ from sigcore.sim import Simulation, run
 from sigcore.sim.spawn import WorldChange
 from sigcore.transport import Transport
 from sigcore.world import parse_world
-from sigcore.world.catalogue import WORLDS_DIR, WorldRefusal, default_sources, find_worlds, matches, open_world
-from sigcore.world.exceptions import WorldError
+from sigcore.world.catalogue import WORLDS_DIR, default_sources, find_worlds, matches, open_world
+from sigcore.world.exceptions import SpawnRefusal, WorldError, WorldRefusal
 from sigcore.world.models import World
-from sigcore.world.resources import SpawnRefusal, SpawnRequest
+from sigcore.world.resources import SpawnRequest
 
 ROOT = Path(__file__).resolve().parents[1]
 CLEANUP = ROOT / "worlds" / "cleanup.xml"

@@ -6,7 +6,7 @@ from enum import StrEnum
 
 from ..errors import ApiError, SigcoreError
 
-__all__ = ["ApiError", "ControllerError", "GraspError", "GraspRefusal"]
+__all__ = ["ApiError", "ControllerError", "GraspError", "GraspRefusal", "UnreachableError"]
 
 
 class GraspRefusal(StrEnum):
@@ -31,3 +31,9 @@ class GraspError(ApiError):
 
 class ControllerError(SigcoreError, RuntimeError):
     """A user controller could not be found or created; the message names the agent and what is valid."""
+
+
+class UnreachableError(ApiError):
+    """No arm pose puts the hand at the target (too far, too close, beyond a joint limit, or no solution within the
+    tolerance); the message gives the target and why. The IK feature's error carries the closest configuration too
+    (``sigcore_ik.exceptions.NoSolutionError``)."""

@@ -11,3 +11,7 @@ class BagError(SigcoreError, ValueError):
 
 class RecordError(SigcoreError, ValueError):
     """A recording cannot start: a bad ``--record-topics`` pattern or rate, a directory that exists."""
+
+
+class SerializeError(SigcoreError, ValueError):
+    """A type the store does not know, or a value that does not fit its type (naming the field)."""

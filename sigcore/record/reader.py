@@ -21,7 +21,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..sim.inputs import Input, ReplayError
+from ..sim.exceptions import ReplayError
+from ..sim.inputs import Input
 from ..world.randomize import sample
 from .bag_reading import BagInfo, bag_info, iter_messages, read_extras
 from .exceptions import BagError

@@ -42,8 +42,8 @@ from ..publish import OFFERED, Offered, Publication, PublicationSink
 from ..sim.inputs import Input
 from ..world.urdf import resolve_mesh
 from .bag import BagWriter
-from .exceptions import BagError, RecordError
-from .serialize import SerializeError, Serializer
+from .exceptions import BagError, RecordError, SerializeError
+from .serialize import Serializer
 
 if TYPE_CHECKING:
     from ..sim.simulation import Simulation

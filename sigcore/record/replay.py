@@ -23,7 +23,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..sim.inputs import Input, ReplayError, refusal
+from ..sim.exceptions import ReplayError
+from ..sim.inputs import Input, refusal
 from ..transport import Transport
 from .reader import RecordingFile, TruthReader, decode_input, open_recording
 from .recorder import truth_frames

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import SigcoreError
+from .exceptions import SerializeError
 
 if TYPE_CHECKING:
     from pydantic import BaseModel
@@ -22,10 +23,6 @@ _NUMPY = {"bool": np.bool_, "byte": np.uint8, "char": np.uint8, "int8": np.int8,
           "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32, "int64": np.int64,
           "uint64": np.uint64, "float32": np.float32, "float64": np.float64}
 _TIME = "builtin_interfaces/msg/Time"
-
-
-class SerializeError(SigcoreError, ValueError):
-    """A type the store does not know, or a value that does not fit its type (naming the field)."""
 
 
 class Serializer:

@@ -21,8 +21,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..publish import Publication, PublicationSink
+from .exceptions import SerializeError
 from .recorder import GROUND_TRUTH_PREFIX, truth_frames
-from .serialize import SerializeError, Serializer
+from .serialize import Serializer
 
 if TYPE_CHECKING:
     from ..sim.events import Subscription

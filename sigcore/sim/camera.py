@@ -34,7 +34,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..agent.exceptions import ApiError
-from ..backend import Array, Backend, BackendError, CameraView, Image, Renderer
+from ..backend import Array, Backend, CameraView, Image, Renderer
+from ..errors import BackendError
 from ..geometry import quat_from_rpy, quat_mul, quat_rotate, quat_to_matrix
 from ..isolation import USER_ERRORS, describe
 from ..publish import Publication, Publications, Publisher

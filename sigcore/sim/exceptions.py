@@ -29,3 +29,12 @@ class RunStateError(SigcoreError, ValueError):
     """A verb of the run control (``sigcore.sim.control.RunControl``) cannot be done now or with that value (no world
     is loaded; steps that are not a whole number of at least 1; a pace that is not a positive number); the message
     says what would be valid."""
+
+
+class ReplayError(SigcoreError, ValueError):
+    """An input cannot be applied again (an unknown kind or entry, a kind not replayed yet, one recorded without its
+    arguments, a spawn, delete or entity information change that does not give what it gave when recorded)."""
+
+
+class VideoError(SigcoreError, ValueError):
+    """A video cannot be made: an unknown camera, an unwritable path, a missing encoder, a bad frame rate."""

@@ -44,13 +44,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
-from ..errors import SigcoreError
+from .exceptions import ReplayError
 
 if TYPE_CHECKING:
     from ..api.deferred import Deferred
     from ..api.table import ApiEntry
+    from ..world.exceptions import SpawnRefusal
     from ..world.models import World
-    from ..world.resources import SpawnRefusal, SpawnRequest
+    from ..world.resources import SpawnRequest
     from .info import EntityInfo
     from .simulation import Simulation
 
@@ -60,11 +61,6 @@ REPLAYED = ("api", "base_velocity", "wheel_velocity", "message", "reset", "entit
 
 _NEEDED = {"spawn": "requests", "delete": "entities", "entity_info": "category"}
 """Kinds noted with only ``what`` by older sigcores: the argument the full form has."""
-
-
-class ReplayError(SigcoreError, ValueError):
-    """An input cannot be applied again (an unknown kind or entry, a kind not replayed yet, one recorded without its
-    arguments, a spawn, delete or entity information change that does not give what it gave when recorded)."""
 
 
 @dataclass(frozen=True)
@@ -244,7 +240,7 @@ class Inputs:
         elif item.kind == "spawn":
             self._spawn(item)
         elif item.kind == "delete":
-            from ..world.resources import SpawnRefusal
+            from ..world.exceptions import SpawnRefusal
 
             try:
                 self.delete(list(a["entities"]), a.get("what", ""))

@@ -23,21 +23,13 @@ from ..agent.controller import Controller, resolve_controller
 from ..agent.exceptions import ApiError, ControllerError
 from ..agent.handle import SimObj
 from ..agent.robot import RobotObj
-from ..backend import BackendError
+from ..errors import BackendError
 from ..geometry import quat_mul, quat_rotate
 from ..isolation import USER_ERRORS, describe
 from ..text import quote
-from ..world.exceptions import WorldError, WorldIssue
+from ..world.exceptions import SpawnRefusal, WorldError, WorldIssue
 from ..world.models import AgentModel, Entity, Object, Robot, Spawnable, World
-from ..world.resources import (
-    SpawnRefusal,
-    SpawnRequest,
-    build_model,
-    check_pose,
-    normalize_namespace,
-    resource_element,
-    unique_name,
-)
+from ..world.resources import SpawnRequest, build_model, check_pose, normalize_namespace, resource_element, unique_name
 from ..world.urdf import UrdfModel
 from .contacts import ContactTracker, rolling_parts
 from .dispatch import Dispatcher

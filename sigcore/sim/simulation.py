@@ -50,7 +50,7 @@ class Simulation:
 
     Raises:
         WorldError: a controller or feature named in the world cannot be created (located in the file).
-        sigcore.plugins.PluginError: the backend is not registered.
+        sigcore.errors.PluginError: the backend is not registered.
     """
 
     def __init__(self, world: World, backend: str | Backend = "mujoco",

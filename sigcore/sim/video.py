@@ -21,10 +21,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..backend import Backend, CameraView
-from ..errors import SigcoreError
 from ..publish import Publication, PublicationSink
 from ..world.models import Camera
 from .camera import CameraFrame, CameraSensor
+from .exceptions import VideoError
 
 if TYPE_CHECKING:
     from .simulation import Simulation
@@ -37,10 +37,6 @@ OVERVIEW_SIZE = (640, 480)
 """Width and height [px] of the overview camera."""
 ELEVATION = math.radians(55)
 """How far the overview camera looks down [rad]."""
-
-
-class VideoError(SigcoreError, ValueError):
-    """A video cannot be made: an unknown camera, an unwritable path, a missing encoder, a bad frame rate."""
 
 
 class _Overview(CameraSensor):

@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING
 from .. import plugins
 from ..agent.controller import resolve_controller
 from ..agent.exceptions import ApiError
-from ..backend import Backend, BackendError
+from ..backend import Backend
+from ..errors import BackendError
 from ..isolation import USER_ERRORS
 from ..world.exceptions import WorldError, WorldIssue
 from ..world.models import World
@@ -113,7 +114,7 @@ class Worlds:
                 (located; found before anything is unloaded when it can be: an unknown controller or plugin name,
                 plugin attributes), OPERATION_FAILED when building it failed later; no world is loaded then.
         """
-        from ..world.catalogue import WorldRefusal
+        from ..world.exceptions import WorldRefusal
 
         self._check_loadable(world)
         self._teardown(notify=self._loaded)
@@ -139,7 +140,7 @@ class Worlds:
         Raises:
             WorldRefusal: NO_WORLD_LOADED when none is.
         """
-        from ..world.catalogue import WorldRefusal
+        from ..world.exceptions import WorldRefusal
 
         if not self._loaded:
             raise WorldRefusal("NO_WORLD_LOADED", "no world is loaded; load one first (load_world)")
@@ -150,7 +151,7 @@ class Worlds:
 
     def _check_loadable(self, world: World) -> None:
         """Refuse ``world`` before anything is torn down when its controllers or plugins cannot be created."""
-        from ..world.catalogue import WorldRefusal
+        from ..world.exceptions import WorldRefusal
         from ..world.plugin_config import plugin_issue, validate_plugin
 
         registered = plugins.controllers()

@@ -1,6 +1,6 @@
 """World files: XML -> strict pydantic models with ``file:line:column`` in every error."""
 
-from .exceptions import WorldError, WorldIssue
+from .exceptions import UrdfError, WorldError, WorldIssue
 from .models import (
     Arm,
     BareAgent,
@@ -19,7 +19,7 @@ from .models import (
     World,
 )
 from .parser import parse_world
-from .urdf import UrdfDocument, UrdfError, UrdfFiles, UrdfJoint, UrdfModel, read_urdf
+from .urdf import UrdfDocument, UrdfFiles, UrdfJoint, UrdfModel, read_urdf
 
 __all__ = [
     "Arm", "BareAgent", "Camera", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "NamedPose", "Object",

@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING
 from lxml import etree
 
 from ..text import clip
-from .exceptions import WorldError, WorldIssue, issue_code
-from .resources import REPOSITORY, SpawnRefusal, find_file, path_is
+from .exceptions import SpawnRefusal, WorldError, WorldIssue, WorldRefusal, issue_code
+from .resources import REPOSITORY, find_file, path_is
 
 if TYPE_CHECKING:
     from .models import World
@@ -33,12 +33,6 @@ WORLDS_DIR = REPOSITORY / "worlds"
 TEXT_SOURCE = "<load_world resource_string>"
 """The file name a world given as text has in messages (its relative paths are resolved from the working
 directory)."""
-
-
-class WorldRefusal(SpawnRefusal):
-    """A world request refused; the code is one of ``NO_RESOURCE``, ``UNSUPPORTED_FORMAT``, ``RESOURCE_PARSE_ERROR``,
-    ``MISSING_ASSETS``, ``UNSUPPORTED_ASSETS``, ``UNSUPPORTED_ELEMENTS``, ``NOT_FOUND``, ``NO_WORLD_LOADED``,
-    ``OPERATION_FAILED`` (simulation_interfaces' LoadWorld, UnloadWorld and GetCurrentWorld codes)."""
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from ..errors import SigcoreError
+from ..errors import ApiError, SigcoreError
 
 IssueCode = Literal["MISSING_ASSETS", "UNSUPPORTED_ASSETS", "UNSUPPORTED_ELEMENTS", "RESOURCE_PARSE_ERROR"]
 """simulation_interfaces' codes for a resource whose world-format text has issues (:func:`issue_code`)."""
@@ -89,3 +89,45 @@ class RandomizeError(WorldError):
 
 class SeedError(SigcoreError, ValueError):
     """A seed that is not an integer >= 0."""
+
+
+class SpawnableError(WorldError):
+    """A spawnable's element does not validate (the issues say where, in its ``spawnable.xml``)."""
+
+
+class UrdfError(SigcoreError, ValueError):
+    """A URDF file could not be read; ``line`` is its line (0 when unknown)."""
+
+    def __init__(self, path: Path, line: int, message: str) -> None:
+        self.path, self.line = path, line
+        super().__init__(f"{path}:{line}: {message}")
+
+
+RefusalCode = Literal["NAME_NOT_UNIQUE", "NAME_INVALID", "UNSUPPORTED_FORMAT", "NO_RESOURCE", "NAMESPACE_INVALID",
+                      "RESOURCE_PARSE_ERROR", "MISSING_ASSETS", "UNSUPPORTED_ASSETS", "INVALID_POSE",
+                      "NOT_FOUND", "OPERATION_FAILED", "UNSUPPORTED_ELEMENTS", "NO_WORLD_LOADED"]
+"""Why a spawn or delete was refused: simulation_interfaces' ``SpawnResult`` codes, plus ``NOT_FOUND`` (no such
+entity to delete) and ``OPERATION_FAILED`` (the backend failed); and for worlds (``catalogue``)
+LoadWorld's ``UNSUPPORTED_ELEMENTS`` and UnloadWorld's ``NO_WORLD_LOADED``."""
+
+
+class Refusal(ApiError):
+    """A request refused because of what was asked, with simulation_interfaces' reason; nothing changed.
+
+    Attributes:
+        code: The reason (:data:`RefusalCode`), mapped to the standard result code by transports.
+    """
+
+    def __init__(self, code: RefusalCode, message: str) -> None:
+        super().__init__(message)
+        self.code: RefusalCode = code
+
+
+class SpawnRefusal(Refusal):
+    """A spawn or delete refused because of what was asked; nothing changed in the world."""
+
+
+class WorldRefusal(Refusal):
+    """A world request refused; the code is one of ``NO_RESOURCE``, ``UNSUPPORTED_FORMAT``, ``RESOURCE_PARSE_ERROR``,
+    ``MISSING_ASSETS``, ``UNSUPPORTED_ASSETS``, ``UNSUPPORTED_ELEMENTS``, ``NOT_FOUND``, ``NO_WORLD_LOADED``,
+    ``OPERATION_FAILED`` (simulation_interfaces' LoadWorld, UnloadWorld and GetCurrentWorld codes)."""

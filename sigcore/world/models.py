@@ -24,7 +24,7 @@ from pydantic import (
 )
 
 from .exceptions import FieldError
-from .limits import MAX_ANGLE, MAX_COORDINATE, MAX_LIDAR_RANGE, MAX_SIZE, check_magnitudes
+from .limits import MAX_ANGLE, MAX_COORDINATE, MAX_LIDAR_RANGE, MAX_SIZE, check_magnitudes, parse_floats
 from .randomization import Located, Randomize
 from .urdf import UrdfDocument, UrdfFiles
 
@@ -38,16 +38,7 @@ MAX_GRAVITY = 1000.0
 def _numbers(count: int | None) -> BeforeValidator:
     def parse(value: object) -> object:
         if isinstance(value, str):
-            parts = value.split()
-            try:
-                numbers = tuple(float(p) for p in parts)
-            except ValueError:
-                raise ValueError(f"{value!r} is not numbers separated by spaces") from None
-            if count is not None and len(numbers) != count:
-                raise ValueError(f"expected {count} numbers, got {len(numbers)} ({value!r})")
-            if not all(math.isfinite(n) for n in numbers):
-                raise ValueError(f"numbers must be finite, got {value!r}")
-            return numbers
+            return parse_floats(value, count)
         if isinstance(value, tuple | list):
             if count is not None and len(value) != count:
                 raise ValueError(f"expected {count} numbers, got {len(value)}")

@@ -10,7 +10,7 @@ from typing import Any
 from lxml import etree
 from pydantic import BaseModel, ValidationError
 
-from .exceptions import WorldError, WorldIssue
+from .exceptions import UrdfError, WorldError, WorldIssue
 from .locate import SourceMap
 from .meshes import mesh_problem
 from .messages import error_field, message, unknown
@@ -31,7 +31,7 @@ from .models import (
     start_pose_name,
 )
 from .randomization import Choice, Option, Randomize, RandomPose, with_option
-from .urdf import UrdfError, UrdfFiles, UrdfModel, resolve_mesh
+from .urdf import UrdfFiles, UrdfModel, resolve_mesh
 
 _AGENTS: dict[str, type[BaseModel]] = {"robot": Robot, "object": Object, "human": Human, "agent": BareAgent}
 _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {

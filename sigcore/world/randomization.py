@@ -8,14 +8,13 @@ Only the element's own rules live here: numbers, ranges, which attributes go tog
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Annotated
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, field_validator, model_validator
 
 from .exceptions import FieldError
-from .limits import MAX_ANGLE, MAX_COORDINATE, check_magnitudes
+from .limits import MAX_ANGLE, MAX_COORDINATE, check_magnitudes, parse_floats
 
 DEFAULT_ATTEMPTS = 200
 """Draws per entity before :func:`sigcore.world.randomize.sample` gives up."""
@@ -31,14 +30,7 @@ def _numbers(count: int, help_: str, limit: float, unit: str, what: str) -> Befo
     def parse(value: object) -> object:
         if not isinstance(value, str):
             return value
-        try:
-            numbers = tuple(float(p) for p in value.split())
-        except ValueError:
-            raise ValueError(f"{value!r} is not numbers separated by spaces; valid: {help_}") from None
-        if len(numbers) != count:
-            raise ValueError(f"expected {count} numbers, got {len(numbers)} ({value!r}); valid: {help_}")
-        if not all(math.isfinite(n) for n in numbers):
-            raise ValueError(f"numbers must be finite, got {value!r}; valid: {help_}")
+        numbers = parse_floats(value, count, help_)
         check_magnitudes(numbers, limit, unit, what)
         return numbers
 

@@ -27,36 +27,15 @@ import uuid
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
 from lxml import etree
 
-from ..errors import ApiError
 from ..geometry import quat_to_rpy
-from .exceptions import WorldError, issue_code
+from .exceptions import RefusalCode, SpawnRefusal, UrdfError, WorldError, issue_code
 from .models import Entity, Spawnable, World, valid_name
 from .parser import parse_world
-from .urdf import UrdfDocument, UrdfError, read_urdf
-
-RefusalCode = Literal["NAME_NOT_UNIQUE", "NAME_INVALID", "UNSUPPORTED_FORMAT", "NO_RESOURCE", "NAMESPACE_INVALID",
-                      "RESOURCE_PARSE_ERROR", "MISSING_ASSETS", "UNSUPPORTED_ASSETS", "INVALID_POSE",
-                      "NOT_FOUND", "OPERATION_FAILED", "UNSUPPORTED_ELEMENTS", "NO_WORLD_LOADED"]
-"""Why a spawn or delete was refused: simulation_interfaces' ``SpawnResult`` codes, plus ``NOT_FOUND`` (no such
-entity to delete) and ``OPERATION_FAILED`` (the backend failed); and for worlds (``catalogue``)
-LoadWorld's ``UNSUPPORTED_ELEMENTS`` and UnloadWorld's ``NO_WORLD_LOADED``."""
-
-
-class SpawnRefusal(ApiError):
-    """A spawn or delete refused because of what was asked; nothing changed in the world.
-
-    Attributes:
-        code: The reason (:data:`RefusalCode`), mapped to the standard result code by transports.
-    """
-
-    def __init__(self, code: RefusalCode, message: str) -> None:
-        super().__init__(message)
-        self.code: RefusalCode = code
+from .urdf import UrdfDocument, read_urdf
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from .exceptions import WorldError, WorldIssue
+from .exceptions import SpawnableError, WorldError, WorldIssue
 from .footprints import local_bounds
 from .models import Entity, Spawnable, World, valid_name
 from .parser import parse_world
@@ -42,9 +42,6 @@ _KINDS = ("robot", "object", "human")
 _DECLARATION = re.compile(r"\A\ufeff?\s*<\?xml[^>]*\?>")
 _COMMENT = re.compile(r"<!--.*?-->", re.S)
 _START = re.compile(r"<([A-Za-z_][\w.\-:]*)")
-
-class SpawnableError(WorldError):
-    """A spawnable's element does not validate (the issues say where, in its ``spawnable.xml``)."""
 
 
 def find_spawnables(world: World, registered: Iterable[Spawnable] = ()) -> list[Spawnable]:

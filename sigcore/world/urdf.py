@@ -18,7 +18,8 @@ from pathlib import Path
 
 from lxml import etree
 
-from ..errors import SigcoreError
+from .exceptions import UrdfError
+from .limits import parse_floats
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 
@@ -66,14 +67,6 @@ class UrdfModel:
             if j.name == name:
                 return j
         raise KeyError(f"no joint '{name}'; joints: {', '.join(j.name for j in self.movable_joints)}")
-
-
-class UrdfError(SigcoreError, ValueError):
-    """A URDF file could not be read; ``line`` is its line (0 when unknown)."""
-
-    def __init__(self, path: Path, line: int, message: str) -> None:
-        self.path, self.line = path, line
-        super().__init__(f"{path}:{line}: {message}")
 
 
 PARSER_OPTIONS: dict[str, bool] = {"resolve_entities": False, "no_network": True}
@@ -240,13 +233,11 @@ def _joint_origin(path: Path, joint: etree._Element, origin: etree._Element | No
     if text is None:
         return (0.0, 0.0, 0.0)
     try:
-        values = tuple(float(v) for v in text.split())
+        values = parse_floats(text, 3)
     except ValueError:
-        values = ()
-    if len(values) != 3 or not all(math.isfinite(v) for v in values):
         assert origin is not None
         raise UrdfError(path, origin.sourceline or 0, f"joint '{joint.get('name')}': <origin {attribute}="
-                                                      f"{text[:40]!r}> needs 3 finite numbers")
+                                                      f"{text[:40]!r}> needs 3 finite numbers") from None
     return (values[0], values[1], values[2])
 
 

@@ -17,6 +17,7 @@ import numpy as np
 from lxml import etree
 
 from ..geometry import quat_from_rpy
+from .limits import parse_floats
 from .urdf import resolve_mesh
 
 log = logging.getLogger("sigcore")
@@ -90,10 +91,9 @@ def _floats(text: str | None, count: int) -> tuple[float, ...] | None:
     if text is None:
         return None
     try:
-        values = tuple(float(v) for v in text.split())
+        return parse_floats(text, count)
     except ValueError:
         return None
-    return values if len(values) == count else None
 
 
 def _geometry(visual: etree._Element, link: str,

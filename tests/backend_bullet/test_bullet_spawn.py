@@ -10,7 +10,7 @@ import pybullet as pb
 import pytest
 from sigcore_backend_bullet import BulletBackend
 
-from sigcore.backend import BackendRefusal
+from sigcore.errors import BackendRefusal
 from sigcore.world import World, parse_world
 
 WORLD = """<world name="w">

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from mujoco_worlds import robot, run
 
-from sigcore.backend import BackendError
+from sigcore.errors import BackendError
 from sigcore.geometry import quat_conj, quat_mul, quat_to_matrix
 
 CAN = '<object name="can" shape="cylinder" size="0.03 0.1" mass="0.2" graspable="true" pose="-0.1 0 0.79"/>'

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from sigcore_backend_mujoco import MujocoBackend
 
-from sigcore.backend import BackendError
+from sigcore.errors import BackendError
 from sigcore.world import World, parse_world
 from sigcore.world.models import Object, Pose, Robot
 

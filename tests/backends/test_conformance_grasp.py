@@ -7,7 +7,7 @@ import pytest
 from conformance_worlds import robot, run
 
 from sigcore.agent import GraspError, GraspRefusal
-from sigcore.backend import BackendError
+from sigcore.errors import BackendError
 from sigcore.geometry import quat_conj, quat_mul, quat_to_matrix
 
 CAN = '<object name="can" shape="cylinder" size="0.03 0.1" mass="0.2" graspable="true" pose="-0.1 0 0.79"/>'

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from conformance_worlds import robot, run
 
-from sigcore.backend import BackendError
+from sigcore.errors import BackendError
 from sigcore.geometry import quat_yaw
 
 FIXED = ' fixed="true"'

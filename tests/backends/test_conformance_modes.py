@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conformance_worlds import robot, run
 
-from sigcore.backend import BackendError
+from sigcore.errors import BackendError
 
 BOX = '<object name="o" shape="box" size="0.2 0.2 0.2" mass="1" pose="0 0 1"/>'
 

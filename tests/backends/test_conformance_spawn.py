@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 from conformance_worlds import robot, run
 
-from sigcore.backend import GROUND, Array, Backend, BackendError
+from sigcore.backend import GROUND, Array, Backend
+from sigcore.errors import BackendError
 from sigcore.geometry import quat_to_matrix
 from sigcore.world import World
 

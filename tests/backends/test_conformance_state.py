@@ -10,7 +10,8 @@ import pytest
 from conformance_worlds import robot, run
 
 from sigcore import plugins
-from sigcore.backend import Backend, BackendError
+from sigcore.backend import Backend
+from sigcore.errors import BackendError
 from sigcore.geometry import quat_from_rpy
 from sigcore.world import Object, World
 
@@ -141,7 +142,7 @@ def test_get_poses_is_get_pose_for_every_part(make_world, build) -> None:
     """get_poses (one call for many parts: what the viewer reads between steps) gives, row by row, exactly what
     get_pose gives for each (entity, part), after steps that moved them; an unknown part is refused like get_pose
     refuses it, naming the part."""
-    from sigcore.backend import BackendRefusal
+    from sigcore.errors import BackendRefusal
 
     b = build(make_world(robot() + '<object name="o" shape="box" size="0.1 0.2 0.3" pose="2 0 1 0.4 0.5 0.6"/>'
                          '<human name="h" pose="-3 0 0"/>'))

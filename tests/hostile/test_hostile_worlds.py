@@ -22,8 +22,10 @@ pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
 CHECK_MANY = Path(__file__).with_name("check_many.py")
 
-SECONDS_PER_WORLD = 30.0
-"""Bound on one world's check [s]."""
+SECONDS_PER_WORLD = 75.0
+"""Bound on one world's check [s]: the slowest, 100 000 objects, takes 12 s on an idle 2-core machine and 39 s when
+the whole suite runs beside it (ci-fresh, 2026-11-28); the bound is over 6 times the idle figure. What it guards
+against is a world that makes the check hang or grow without end, not a few seconds."""
 
 MAX_RSS_KIB = 1024 * 1024
 """Bound on the peak resident memory of a checking process [KiB] (1 GiB), imports and all of its worlds included."""

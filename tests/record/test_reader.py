@@ -18,7 +18,8 @@ from sigcore.record.reader import TruthReader, open_recording
 from sigcore.record.recorder import _TfLayout
 from sigcore.record.replay import Recording, plan_replay
 from sigcore.record.serialize import Serializer
-from sigcore.sim.inputs import Input, ReplayError
+from sigcore.sim.exceptions import ReplayError
+from sigcore.sim.inputs import Input
 
 ROOT = Path(__file__).resolve().parents[2]
 

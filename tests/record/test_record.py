@@ -22,12 +22,15 @@ from rosbags.typesys import Stores, get_typestore
 from sigcore.publish import Publication, PublicationSink
 from sigcore.record import GROUND_TRUTH, Recorder
 from sigcore.record.bag_reading import bag_info
+from sigcore.record.exceptions import SerializeError
 from sigcore.record.recorder import _TfLayout
-from sigcore.record.serialize import SerializeError, Serializer
+from sigcore.record.serialize import Serializer
 from sigcore.sim import Simulation, run
-from sigcore.sim.inputs import Input, ReplayError, refusal
+from sigcore.sim.exceptions import ReplayError
+from sigcore.sim.inputs import Input, refusal
 from sigcore.world import parse_world
-from sigcore.world.resources import SpawnRefusal, SpawnRequest
+from sigcore.world.exceptions import SpawnRefusal
+from sigcore.world.resources import SpawnRequest
 
 ROOT = Path(__file__).resolve().parents[2]
 CLEANUP = ROOT / "worlds" / "cleanup.xml"

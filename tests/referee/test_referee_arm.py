@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from referee_worlds import ROOT
-from sigcore_referee.arm import TUCK, UnreachableError, hand_down, joint_names
+from sigcore_referee.arm import TUCK, hand_down, joint_names
 
+from sigcore.agent.exceptions import UnreachableError
 from sigcore.geometry import quat_rotate
 from sigcore.sim import Simulation
 from sigcore.world import parse_world

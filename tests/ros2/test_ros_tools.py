@@ -153,7 +153,7 @@ def test_yaml_of_a_message_is_like_ros2_topic_echo() -> None:
     j = JointState(name=["a", "b"], position=[0.5, 1.0])
     text = to_yaml(j, YamlStyle(no_arr=True, no_str=True))
     assert "position: '<sequence<double>, length: 2>'" in text and "frame_id: '<string, length: 0>'" in text
-    from sigcore_ros2.tools import RosToolError
+    from sigcore_ros2.exceptions import RosToolError
 
     with pytest.raises(RosToolError, match=r"point has no field 'w'; its fields: x, y, z"):
         field_of(p, ["point", "w"], "geometry_msgs/msg/PointStamped")
@@ -164,7 +164,8 @@ def test_requests_are_filled_from_yaml_and_refused_clearly() -> None:
     type are refused naming the line, the valid fields, the field and its type; a type that is not installed names
     its package."""
     from geometry_msgs.msg import Polygon
-    from sigcore_ros2.tools import RosToolError, checked, fill, interface_class, parse_request
+    from sigcore_ros2.exceptions import RosToolError
+    from sigcore_ros2.tools import checked, fill, interface_class, parse_request
     from simulation_interfaces.srv import SetEntityState
 
     req = fill(checked(SetEntityState.Request),

@@ -22,9 +22,10 @@ from sigcore_viewer.scenebuild import SceneLayout
 from sigcore_viewer.viewer import Pushed, Snapshot, WebViewer
 
 from sigcore.agent.events import Message
+from sigcore.errors import ViewerError
 from sigcore.publish import Publication
 from sigcore.sim import Simulation, run
-from sigcore.viewer import DEFAULT_PORT, VIEWER_SENDER, ViewerError
+from sigcore.viewer import DEFAULT_PORT, VIEWER_SENDER
 from sigcore.world import World, parse_world
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -41,7 +41,8 @@ import numpy as np
 import numpy.typing as npt
 import pybullet as pb
 
-from sigcore.backend import GROUND, MAIN, Array, Backend, BackendError, BackendRefusal, Renderer
+from sigcore.backend import GROUND, MAIN, Array, Backend, Renderer, find_entity
+from sigcore.errors import BackendError, BackendRefusal
 from sigcore.geometry import cross
 from sigcore.world.models import Human, Object, Robot, World
 
@@ -65,6 +66,7 @@ class BulletBackend(Backend):
     """
 
     name: ClassVar[str] = "bullet"
+    title: ClassVar[str] = "PyBullet"
     replay_tolerance: ClassVar[float] = 1e-6
     """PyBullet's replays are stated to be within 1e-6 (not assumed bitwise)."""
 
@@ -352,16 +354,12 @@ class BulletBackend(Backend):
         return list(self._entity(entity).joints)
 
     def _client(self) -> int:
-        if not self._built:
-            raise BackendError("the PyBullet backend has no world yet; call build(world) first")
+        self.require_world()
         return self.client
 
     def _entity(self, name: str) -> EntityIndex:
-        self._client()
-        entity = self._entities.get(name)
-        if entity is None:
-            raise BackendRefusal(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
-        return entity
+        self.require_world()
+        return find_entity(self._entities, name)
 
     # ------------------------------------------------------------------ state
     def _frame(self, e: EntityIndex, link: int) -> tuple[Sequence[float], Sequence[float]]:

@@ -18,11 +18,13 @@ import os
 
 import pybullet as pb
 
-from sigcore.backend import MAIN, BackendError
+from sigcore.backend import MAIN
+from sigcore.errors import BackendError
 from sigcore.scene import human_dimensions
+from sigcore.world.exceptions import UrdfError
 from sigcore.world.meshes import mesh_problem
 from sigcore.world.models import Entity, Human, Object, Robot, World
-from sigcore.world.urdf import UrdfDocument, UrdfError
+from sigcore.world.urdf import UrdfDocument
 
 from .frames import quat_from_rpy
 from .layout import BASE, GROUP_STATIC, MASK_STATIC, EntityIndex, JointIndex

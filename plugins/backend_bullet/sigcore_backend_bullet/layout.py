@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from sigcore.backend import MAIN, BackendRefusal
+from sigcore.backend import find_joint, find_part
 
 BASE = -1
 """PyBullet's link index of a body's base (a robot's root link)."""
@@ -109,19 +109,8 @@ class EntityIndex:
         Raises:
             BackendRefusal: no such part; the message lists the valid ones.
         """
-        if part is None:
-            return BASE
-        link = self.part_link.get(part)
-        if link is None:
-            alias = f" (or '{MAIN}')" if self.kind == "robot" else ""
-            raise BackendRefusal(f"{self.kind} '{self.name}' has no part '{part}'; parts: "
-                               f"{', '.join(self.parts)}{alias}")
-        return link
+        return BASE if part is None else find_part(self.kind, self.name, self.part_link, part, self.parts)
 
     def joint(self, name: str) -> JointIndex:
         """The movable joint ``name``; :class:`BackendRefusal` listing the valid joints otherwise."""
-        joint = self.joints.get(name)
-        if joint is None:
-            raise BackendRefusal(f"{self.kind} '{self.name}' has no movable joint '{name}'; joints: "
-                               f"{', '.join(self.joints) or 'none'}")
-        return joint
+        return find_joint(self.kind, self.name, self.joints, name)

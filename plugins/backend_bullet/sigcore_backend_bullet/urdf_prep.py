@@ -20,9 +20,10 @@ from dataclasses import dataclass
 
 from lxml import etree
 
-from sigcore.backend import BackendError
+from sigcore.backend import collision_urdf
+from sigcore.errors import BackendError
 from sigcore.world.meshes import mesh_problem
-from sigcore.world.urdf import UrdfDocument, link_friction, resolve_mesh
+from sigcore.world.urdf import UrdfDocument, link_friction
 
 _ZERO_INERTIAL = ('<inertial><origin xyz="0 0 0"/><mass value="0"/>'
                   '<inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>')
@@ -58,30 +59,9 @@ def prepare_urdf(urdf: UrdfDocument, what: str, floating: bool) -> PreparedUrdf:
             ``<inertial>``.
     """
     path = urdf.path
-    root = urdf.copy_root()
-    etree.strip_tags(root, etree.Comment)
-    for visual in list(root.iter("visual")):
-        visual.getparent().remove(visual)
-    for mesh in root.iter("mesh"):
-        filename = str(mesh.get("filename", ""))
-        resolved = resolve_mesh(filename, path.parent)
-        if resolved is None:
-            link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
-            raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
-                               f"(relative paths are relative to the URDF's directory {path.parent})")
-        problem = mesh_problem(resolved)  # PyBullet crashes the process on some broken meshes
-        if problem is not None:
-            link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
-            raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path}: {problem}")
-        mesh.set("filename", str(resolved))
-    links = [str(e.get("name")) for e in root.findall("link")]
-    if not links:
+    root, roots = collision_urdf(urdf, what, mesh_problem)  # PyBullet crashes the process on some broken meshes
+    if root.find("link") is None:
         raise BackendError(f"{what}: URDF {path} has no <link>")
-    children = {str(c.get("link")) for c in root.iter("child")}
-    roots = [link for link in links if link not in children]
-    if roots == ["world"]:
-        raise BackendError(f"{what}: the root link of {path} is 'world'; remove the 'world' link and its "
-                           "joint, and set fixed=\"true\" on the <robot> to weld the robot to the world")
     moving = {str(j.find("child").get("link")) for j in root.findall("joint")
               if j.get("type") != "fixed" and j.find("child") is not None}
     if floating and roots:
@@ -96,8 +76,8 @@ def prepare_urdf(urdf: UrdfDocument, what: str, floating: bool) -> PreparedUrdf:
                                    "with positive mass and inertia; masses come only from <inertial>)")
             link.insert(0, etree.fromstring(_ZERO_INERTIAL))
             massless.add(name)
-    return PreparedUrdf(etree.tostring(root, encoding="unicode"), roots[0] if roots else links[0],
-                        link_friction(root), frozenset(massless))
+    first = roots[0] if roots else str(root.find("link").get("name"))
+    return PreparedUrdf(etree.tostring(root, encoding="unicode"), first, link_friction(root), frozenset(massless))
 
 
 def write_temp(text: str) -> str:

@@ -35,7 +35,8 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from sigcore.backend import Array, Backend, BackendError, BackendRefusal, Renderer
+from sigcore.backend import Array, Backend, Renderer, find_entity
+from sigcore.errors import BackendError, BackendRefusal
 from sigcore.geometry import normalized as unit
 from sigcore.geometry import quat_to_matrix
 from sigcore.world.models import World
@@ -69,6 +70,7 @@ class MujocoBackend(Backend):
     """
 
     name: ClassVar[str] = "mujoco"
+    title: ClassVar[str] = "MuJoCo"
     replay_tolerance: ClassVar[float] = 0.0
     """MuJoCo is deterministic to the bit: a replay reproduces every recorded pose exactly."""
 
@@ -179,7 +181,7 @@ class MujocoBackend(Backend):
             BackendError: an entity cannot be built or MuJoCo rejects it (the message names it); the running
                 world is then unchanged.
         """
-        self._require_world()
+        self.require_world()
         spec = self._spec.copy()
         plans, welds = add_to_spec(spec, world, names, self._plans)
         self._recompile(spec, [*self._plans, *plans], [*self._welds, *welds], plans)
@@ -240,7 +242,7 @@ class MujocoBackend(Backend):
         """A threaded renderer of this world through MuJoCo's OpenGL renderer (:mod:`.render`)."""
         from .render import MujocoRenderer
 
-        self._require_world()
+        self.require_world()
         return MujocoRenderer(self)
 
     # ------------------------------------------------------------------ introspection
@@ -252,16 +254,9 @@ class MujocoBackend(Backend):
         """Movable joints of a robot in URDF order; empty for objects and humans."""
         return list(self._entity(entity).joints)
 
-    def _require_world(self) -> None:
-        if not self._built:
-            raise BackendError("the MuJoCo backend has no world yet; call build(world) first")
-
     def _entity(self, name: str) -> EntityIndex:
-        self._require_world()
-        entity = self._entities.get(name)
-        if entity is None:
-            raise BackendRefusal(f"no entity '{name}'; entities: {', '.join(self._entities) or 'none'}")
-        return entity
+        self.require_world()
+        return find_entity(self._entities, name)
 
     def _sync(self) -> None:
         """Bring poses, centres of mass and velocities in ``data`` up to date with ``qpos``/``qvel``."""

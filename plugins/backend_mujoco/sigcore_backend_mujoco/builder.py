@@ -31,11 +31,12 @@ from itertools import combinations
 import mujoco
 import numpy as np
 
-from sigcore.backend import BackendError
+from sigcore.errors import BackendError
 from sigcore.geometry import quat_from_rpy
 from sigcore.scene import HUMAN_COLOR, Color, human_dimensions, link_colors
+from sigcore.world.exceptions import UrdfError
 from sigcore.world.models import Human, Object, Pose, Robot, World
-from sigcore.world.urdf import UrdfDocument, UrdfError
+from sigcore.world.urdf import UrdfDocument
 from sigcore.world.visuals import DEFAULT_COLOR
 
 from .plan import (

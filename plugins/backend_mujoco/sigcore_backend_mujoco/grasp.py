@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import mujoco
 
-from sigcore.backend import BackendRefusal
+from sigcore.errors import BackendRefusal
 from sigcore.geometry import quat_conj, quat_mul
 
 from .layout import EntityIndex, Layout

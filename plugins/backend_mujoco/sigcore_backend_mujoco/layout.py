@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from sigcore.backend import GROUND, MAIN, BackendRefusal
+from sigcore.backend import GROUND, MAIN, find_joint, find_part
 
 from .plan import EntityPlan, WeldPlan, prefix
 from .servo import POSITION, ArmServo, Drive, WheelMotor, motor_name
@@ -86,22 +86,11 @@ class EntityIndex:
         Raises:
             BackendRefusal: no such part; the message lists the valid ones.
         """
-        if part is None:
-            return self.root
-        body = self.part_body.get(part)
-        if body is None:
-            alias = f" (or '{MAIN}')" if self.kind == "robot" else ""
-            raise BackendRefusal(f"{self.kind} '{self.name}' has no part '{part}'; parts: "
-                               f"{', '.join(self.parts)}{alias}")
-        return body
+        return self.root if part is None else find_part(self.kind, self.name, self.part_body, part, self.parts)
 
     def joint(self, name: str) -> JointIndex:
         """The actuated joint ``name``; :class:`BackendRefusal` listing the valid joints otherwise."""
-        joint = self.joints.get(name)
-        if joint is None:
-            raise BackendRefusal(f"{self.kind} '{self.name}' has no movable joint '{name}'; joints: "
-                               f"{', '.join(self.joints) or 'none'}")
-        return joint
+        return find_joint(self.kind, self.name, self.joints, name)
 
 
 @dataclass

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 import mujoco
 
-from sigcore.backend import BackendError
+from sigcore.errors import BackendError
 
 from .layout import EntityIndex, Layout, index_model
 from .plan import EntityPlan, WeldPlan

@@ -22,7 +22,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import mujoco
 import numpy as np
 
-from sigcore.backend import BackendError, CameraView, Image, Renderer
+from sigcore.backend import CameraView, Image, Renderer
+from sigcore.errors import BackendError
 
 from .plan import GROUP_COLLISION, GROUP_VISUAL
 

@@ -24,8 +24,9 @@ from dataclasses import dataclass
 import mujoco
 from lxml import etree
 
-from sigcore.backend import BackendError
-from sigcore.world.urdf import UrdfDocument, link_friction, resolve_mesh
+from sigcore.backend import collision_urdf
+from sigcore.errors import BackendError
+from sigcore.world.urdf import UrdfDocument, link_friction
 
 
 @dataclass(frozen=True)
@@ -56,27 +57,10 @@ def load_urdf(urdf: UrdfDocument, what: str, scale: float = 1.0) -> LoadedUrdf:
         BackendError: missing collision mesh, a root link called ``world``, or a URDF MuJoCo rejects.
     """
     path = urdf.path
-    root = urdf.copy_root()
-    etree.strip_tags(root, etree.Comment)
-    for visual in list(root.iter("visual")):
-        visual.getparent().remove(visual)
-    for mesh in root.iter("mesh"):
-        filename = str(mesh.get("filename", ""))
-        resolved = resolve_mesh(filename, path.parent)
-        if resolved is None:
-            link = next((a.get("name") for a in mesh.iterancestors("link")), "?")
-            raise BackendError(f"{what}: collision mesh '{filename}' of link '{link}' in {path} not found "
-                               f"(relative paths are relative to the URDF's directory {path.parent})")
-        mesh.set("filename", str(resolved))
+    root, _ = collision_urdf(urdf, what)
     if scale != 1.0:
         _scale(root, scale)
     friction = link_friction(root)
-    links = [str(e.get("name")) for e in root.findall("link")]
-    children = {str(c.get("link")) for c in root.iter("child")}
-    roots = [link for link in links if link not in children]
-    if roots == ["world"]:
-        raise BackendError(f"{what}: the root link of {path} is 'world'; remove the 'world' link and its "
-                           "joint, and set fixed=\"true\" on the <robot> to weld the robot to the world")
     try:
         spec = mujoco.MjSpec.from_string(etree.tostring(root, encoding="unicode"))
     except ValueError as e:

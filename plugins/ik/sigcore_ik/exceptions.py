@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from sigcore.agent.exceptions import ApiError
+from sigcore.agent.exceptions import ApiError, UnreachableError
 from sigcore.text import quote
 
 
@@ -47,7 +47,7 @@ class InvalidTargetError(IkError):
     """A target with a non-finite number, a zero quaternion or a bad tolerance or timeout."""
 
 
-class UnreachableError(IkError):
+class NoSolutionError(IkError, UnreachableError):
     """The solver found no configuration within the tolerance (the target is out of reach or out of the limits).
 
     The error response carries the closest configuration: ``joint_names``, ``joint_positions``, ``solver_error``

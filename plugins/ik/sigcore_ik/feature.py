@@ -15,7 +15,7 @@ from sigcore.world.exceptions import FieldError
 
 from .chain import Chain, set_chain_angles
 from .config import IkConfig
-from .exceptions import InvalidTargetError, MoveError, UnreachableError
+from .exceptions import InvalidTargetError, MoveError, NoSolutionError
 from .model import Vector
 from .motion import SETTLED_SPEED, ArmMotion, chain_gravity, duration_for, integral_times
 from .robot import RobotIk
@@ -77,14 +77,14 @@ class IkFeature(Feature):
         """Solve for a world-frame target from the current configuration (warm start).
 
         Raises:
-            UnreachableError: with the residual and the closest configuration.
+            NoSolutionError: with the residual and the closest configuration.
         """
         r = self.robot(robot)
         target_root = r.base_pose().actInv(target_world)
         result = solve(r.model, chain, r.configuration(), target_root, position_only, tolerance, self.settings)
         self.solves += 1
         if not result.success:
-            raise UnreachableError(chain.name, result.position_error, result.rotation_error, tolerance,
+            raise NoSolutionError(chain.name, result.position_error, result.rotation_error, tolerance,
                                    result.angles, position_only, chain.joints)
         return result
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from sigcore.errors import SigcoreError
+from sigcore.agent.exceptions import UnreachableError
 
 SHOULDER_Y = 0.20
 """Shoulders at (0, ±0.20, 1.15) in the base frame [m]."""
@@ -22,10 +22,6 @@ TUCK = (0.0, 0.4, 2.4, -2.1, 0.0)
 """Carry pose: hand at (0.35, ±0.20, 0.99) in the base frame, above table height."""
 
 Pose = tuple[float, float, float, float, float]
-
-
-class UnreachableError(SigcoreError, ValueError):
-    """No arm pose puts the hand there pointing down; the message gives the point and the reason."""
 
 
 def joint_names(side: str) -> list[str]:

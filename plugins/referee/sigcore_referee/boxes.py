@@ -10,7 +10,9 @@ import numpy as np
 import numpy.typing as npt
 
 from sigcore.geometry import quat_conj, quat_rotate
-from sigcore.world.urdf import UrdfDocument, UrdfError
+from sigcore.world.exceptions import UrdfError
+from sigcore.world.limits import parse_floats
+from sigcore.world.urdf import UrdfDocument
 
 from .exceptions import BoxGeometryError
 
@@ -43,10 +45,7 @@ class TrashBox:
 
 
 def _numbers(text: str | None, n: int, default: str) -> tuple[float, ...]:
-    values = tuple(float(v) for v in (text or default).split())
-    if len(values) != n:
-        raise ValueError(f"expected {n} numbers, got {text!r}")
-    return values
+    return parse_floats(text or default, n)
 
 
 def _collision_boxes(box: str, document: UrdfDocument, scale: float) -> list[Bounds]:

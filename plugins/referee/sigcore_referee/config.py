@@ -7,6 +7,7 @@ from typing import Annotated, Literal
 from pydantic import BeforeValidator, Field, field_validator
 
 from sigcore.feature import FeatureConfig
+from sigcore.world.limits import parse_floats
 
 
 def _words(value: object) -> object:
@@ -16,12 +17,7 @@ def _words(value: object) -> object:
 def _corners(value: object) -> object:
     if not isinstance(value, str):
         return value
-    try:
-        numbers = tuple(float(v) for v in value.split())
-    except ValueError:
-        raise ValueError(f"{value!r} is not numbers separated by spaces") from None
-    if len(numbers) != 6:
-        raise ValueError(f"expected 6 numbers 'x0 y0 z0 x1 y1 z1', got {len(numbers)}")
+    numbers = parse_floats(value, 6, expected=" 'x0 y0 z0 x1 y1 z1'")
     if not all(numbers[i] < numbers[i + 3] for i in range(3)):
         raise ValueError("the corners must satisfy x0 < x1, y0 < y1, z0 < z1")
     return numbers

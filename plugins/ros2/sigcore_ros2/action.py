@@ -12,7 +12,7 @@ from simulation_interfaces.msg import Result, SimulationState
 from sigcore.api.call import log_key
 from sigcore.text import clip
 
-from .siminfo import Refusal
+from .exceptions import Refusal
 from .siminterfaces import MAX_STEPS, SimInterfaces, StepWaiter
 
 if TYPE_CHECKING:

@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from sigcore.transport import TransportError
+from sigcore.errors import TransportError
 from sigcore.world.messages import error_field
 from sigcore.world.plugin_config import _message as attribute_message  # the world file's wording, "valid: ..."
 

@@ -20,10 +20,11 @@ from geometry_msgs.msg import Vector3
 from simulation_interfaces.msg import Bounds, EntityCategory, EntityInfo, NamedPose, Result, TagsFilter
 
 from sigcore.agent.exceptions import ApiError
-from sigcore.errors import SigcoreError
 from sigcore.geometry import quat_from_rpy
 from sigcore.sim.info import Category, named_poses_with_tags
 from sigcore.text import clip, quote
+
+from .exceptions import Refusal
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
@@ -40,19 +41,6 @@ CATEGORY_CODES: dict[Category, int] = {
 CATEGORY_NAMES: dict[int, Category] = {code: name for name, code in CATEGORY_CODES.items()}
 _VALID_CATEGORIES = ", ".join(f"{code} CATEGORY_{name.upper()}" for name, code in CATEGORY_CODES.items())
 _VALID_BOUNDS = "0 TYPE_EMPTY, 1 TYPE_BOX (2 corners), 3 TYPE_SPHERE (centre, radius in x)"
-
-
-class Refusal(SigcoreError):
-    """A request that is answered with ``code`` and ``message`` (a simulation_interfaces Result)."""
-
-    def __init__(self, code: int, message: str) -> None:
-        super().__init__(message)
-        self.code = code
-        self.message = message
-
-    def result(self) -> Result:
-        """The Result to answer with."""
-        return Result(result=self.code, error_message=self.message)
 
 
 def _ok() -> Result:

@@ -53,10 +53,12 @@ from simulation_interfaces.srv import (
 from sigcore.agent.exceptions import ApiError
 from sigcore.api.call import log_key
 from sigcore.text import clip, quote
-from sigcore.world.resources import RefusalCode, SpawnRefusal, SpawnRequest
+from sigcore.world.exceptions import SpawnRefusal
+from sigcore.world.resources import RefusalCode, SpawnRequest
 
 from .convert import finite, stamp
-from .siminfo import EntityQueries, Refusal, bounds_box
+from .exceptions import Refusal
+from .siminfo import EntityQueries, bounds_box
 from .worlds import SERVICES as WORLD_SERVICES
 from .worlds import WorldServices
 
@@ -90,7 +92,7 @@ SPAWN_CODES: dict[RefusalCode, int] = {
     "INVALID_POSE": SpawnResult.INVALID_POSE, "NOT_FOUND": Result.RESULT_NOT_FOUND,
     "OPERATION_FAILED": Result.RESULT_OPERATION_FAILED,
 }
-"""The core's refusal codes (:data:`sigcore.sim.spawn.RefusalCode`) as simulation_interfaces result codes (the
+"""The core's refusal codes (:data:`sigcore.world.exceptions.RefusalCode`) as simulation_interfaces result codes (the
 SpawnEntity and SpawnResult constants are the same numbers)."""
 
 SERVICES = {

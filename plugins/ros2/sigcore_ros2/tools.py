@@ -40,8 +40,9 @@ import typer
 import yaml
 from rich.console import Console
 
-from sigcore.errors import SigcoreError
 from sigcore.text import quote
+
+from .exceptions import RosToolError
 
 ros_app = typer.Typer(help="ROS 2 introspection without a ROS install: topics, echo, hz, call, record. Where ROS 2 is "
                       "installed, the real ros2 CLI does the same.", no_args_is_help=True,
@@ -72,15 +73,6 @@ LIST_LIMIT = 40
 """An error naming an unknown topic or service lists at most this many of those that exist [names]."""
 PENDING_LIMIT = 10_000
 """``record --use-sim-time``: at most this many messages received before the first /clock are kept [messages]."""
-
-
-class RosToolError(SigcoreError, RuntimeError):
-    """A ``sigcore ros`` command cannot go on: ``code`` 2 for bad input (an unknown topic, service, type or field,
-    malformed YAML), 1 for what happened (a timeout, no message)."""
-
-    def __init__(self, message: str, code: int = 2) -> None:
-        super().__init__(message)
-        self.code = code
 
 
 class Reliability(enum.StrEnum):
@@ -781,7 +773,7 @@ def definition(serializer: Any, typename: str) -> tuple[str, str]:
     from rosbags.interfaces import Nodetype
     from rosbags.typesys import get_types_from_msg
 
-    from sigcore.record.serialize import SerializeError
+    from sigcore.record.exceptions import SerializeError
 
     if not serializer.knows(typename):
         found: dict[str, Any] = {}

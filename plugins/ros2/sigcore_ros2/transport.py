@@ -20,8 +20,9 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from sigcore.api.call import log_key
+from sigcore.errors import TransportError
 from sigcore.text import clip
-from sigcore.transport import Endpoint, Transport, TransportError, publication_endpoints
+from sigcore.transport import Endpoint, Transport, publication_endpoints
 
 from .config import Ros2Config, config_for, selects_model, sigros_agents
 from .logfilter import OncePerKind

@@ -19,11 +19,13 @@ from simulation_interfaces.msg import Resource, Result, WorldResource
 from simulation_interfaces.srv import GetAvailableWorlds, GetCurrentWorld, LoadWorld, UnloadWorld
 
 from sigcore.text import clip, quote
-from sigcore.world.catalogue import WorldRefusal, find_worlds, matches, open_world
 from sigcore.world.catalogue import WorldResource as Listed
+from sigcore.world.catalogue import find_worlds, matches, open_world
+from sigcore.world.exceptions import WorldRefusal
 from sigcore.world.resources import RefusalCode
 
-from .siminfo import Refusal, tags_of
+from .exceptions import Refusal
+from .siminfo import tags_of
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
@@ -36,7 +38,7 @@ LOAD_CODES: dict[RefusalCode, int] = {
     "UNSUPPORTED_ELEMENTS": LoadWorld.Response.UNSUPPORTED_ELEMENTS, "NOT_FOUND": Result.RESULT_NOT_FOUND,
     "OPERATION_FAILED": Result.RESULT_OPERATION_FAILED,
 }
-"""The core's world refusal codes (:class:`sigcore.world.catalogue.WorldRefusal`) as LoadWorld result codes."""
+"""The core's world refusal codes (:class:`sigcore.world.exceptions.WorldRefusal`) as LoadWorld result codes."""
 
 SERVICES = {"get_available_worlds": GetAvailableWorlds, "get_current_world": GetCurrentWorld,
             "load_world": LoadWorld, "unload_world": UnloadWorld}

@@ -15,17 +15,13 @@ from typing import Any
 
 import numpy as np
 
-from sigcore.errors import SigcoreError
+from .exceptions import BrowserMissing
 
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMEDRIVER = Path("/usr/bin/chromedriver")
 FLAGS = ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
          "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run",
          "--enable-unsafe-swiftshader")
-
-
-class BrowserMissing(SigcoreError, RuntimeError):
-    """Chromium, its driver or selenium is not installed; the message says what to install."""
 
 
 def missing() -> str | None:

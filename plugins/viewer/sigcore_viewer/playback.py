@@ -34,11 +34,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from sigcore.errors import SigcoreError
+from sigcore.errors import SigcoreError, ViewerError
 from sigcore.geometry import quat_yaw
 from sigcore.text import clip, quote
-from sigcore.viewer import ViewerError
 
+from .exceptions import Interrupted
 from .scenebuild import SceneLayout, layout_of
 
 if TYPE_CHECKING:
@@ -183,10 +183,6 @@ class Recorded:
         return self.poses[i].copy(), self.tracked & ~self.present[i]
 
 
-class Interrupted(ViewerError):
-    """``stop()`` became true while a recording was read (Ctrl-C)."""
-
-
 def load(path: Path, workdir: Path, stop: Callable[[], bool] | None = None) -> Recorded:
     """Read the recording ``path`` (a bag directory or its ``.mcap`` file; a cut one as far as it goes).
 
@@ -202,7 +198,7 @@ def load(path: Path, workdir: Path, stop: Callable[[], bool] | None = None) -> R
             missing.
     """
     from sigcore.record.reader import open_recording
-    from sigcore.sim.inputs import ReplayError
+    from sigcore.sim.exceptions import ReplayError
 
     path = Path(path)
     try:

@@ -40,15 +40,17 @@ import numpy as np
 from sigcore.agent.exceptions import ApiError
 from sigcore.agent.robot import RobotObj
 from sigcore.api.call import call
+from sigcore.errors import ViewerError
 from sigcore.geometry import quat_to_matrix, quat_yaw
 from sigcore.publish import Publication, PublicationSink
 from sigcore.sim.exceptions import RunStateError
 from sigcore.text import clip, quote
-from sigcore.viewer import DEFAULT_PORT, VIEWER_SENDER, Viewer, ViewerError
+from sigcore.viewer import DEFAULT_PORT, VIEWER_SENDER, Viewer
 from sigcore.world.models import Object
 
+from .exceptions import PeerGone
 from .scenebuild import SceneLayout, layout_of
-from .wire import Inbox, Outbox, PeerGone, receive, tune
+from .wire import Inbox, Outbox, receive, tune
 
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation

@@ -17,17 +17,13 @@ import struct
 from collections.abc import Iterator
 from typing import Any
 
-from sigcore.viewer import ViewerError
+from .exceptions import PeerGone
 
 HEADER = struct.Struct("<I")
 LIMIT = 256 * 1024 * 1024
 """The largest message either end accepts [bytes] (a map or a camera image is far smaller)."""
 BUFFER = 4 * 1024 * 1024
 """The socket buffers asked for [bytes]: room for a few snapshots with images."""
-
-
-class PeerGone(ViewerError):
-    """The other process closed its end (it ended, or was killed)."""
 
 
 def encode(message: tuple[Any, ...]) -> bytes:
