@@ -1,6 +1,8 @@
 """Calls /get_simulation_state with a client whose response reader can never match the simulator's response writer
 (transient-local durability asked, volatile offered), while its request writer does: the simulator's answer cannot
-be delivered, for real. Sends a call every 0.5 s for S seconds (argv[1]); prints whether any answer came (JSON)."""
+be delivered, for real. Once the service is in the ROS graph (at most 60 s: discovery is slow on a loaded machine, and
+a request sent before the server's request reader is matched is lost), sends a call every 0.5 s for S seconds
+(argv[1]); prints whether any answer came (JSON)."""
 
 from __future__ import annotations
 
@@ -16,6 +18,11 @@ rclpy.init()
 node = rclpy.create_node("unmatched_call")
 qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 client = node.create_client(GetSimulationState, "/get_simulation_state", qos_profile=qos)
+deadline = time.monotonic() + 60.0
+while time.monotonic() < deadline and not any(name == "/get_simulation_state"
+                                               for name, _ in node.get_service_names_and_types()):
+    rclpy.spin_once(node, timeout_sec=0.1)
+rclpy.spin_once(node, timeout_sec=0.5)  # the request writer matches the reader the graph just showed
 futures = []
 end = time.monotonic() + float(sys.argv[1])
 while time.monotonic() < end:
