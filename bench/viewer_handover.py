@@ -29,7 +29,7 @@ import numpy as np
 import viser
 from sigcore_viewer.front import Front
 from sigcore_viewer.scenebuild import layout_of
-from sigcore_viewer.viewer import Snapshot
+from sigcore_viewer.snapshot import Snapshot
 
 from sigcore.sim import Simulation
 from sigcore.world import parse_world

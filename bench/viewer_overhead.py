@@ -83,7 +83,7 @@ from pathlib import Path
 from typing import Any
 
 from sigcore_viewer import WebViewer
-from sigcore_viewer.viewer import Pushed
+from sigcore_viewer.snapshot import Pushed
 
 from sigcore.sim import Simulation, run
 from sigcore.transport import Transport

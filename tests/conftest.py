@@ -57,3 +57,17 @@ def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
 @pytest.hookimpl(tryfirst=True)  # before xdist reads the xdist_group markers
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     tiers.arrange(config, items)
+
+
+@pytest.fixture(autouse=True)
+def no_log_filter_left() -> Iterator[None]:
+    """A test leaves no log filter on the ``sigcore`` loggers (a ROS 2 transport that was started and never stopped
+    leaves its once-per-kind filter, which would hide later tests' warnings)."""
+    import logging
+
+    names = ("sigcore", "sigcore.api", "sigcore.ros2")
+    yield
+    left = {n: logging.getLogger(n).filters for n in names if logging.getLogger(n).filters}
+    for n in left:
+        logging.getLogger(n).filters.clear()
+    assert not left, f"log filters left on {left}: a transport started by this test was not stopped"

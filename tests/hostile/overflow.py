@@ -1,5 +1,5 @@
-"""Worlds with an overflowing number in one attribute: every number attribute of the world models
-(``sigcore/world/models.py`` and ``<randomize>``'s ``sigcore/world/randomization.py``) set to ``1e308``, ``inf`` and
+"""Worlds with an overflowing number in one attribute: every number attribute of the world models (the package
+``sigcore/world/models/`` and ``<randomize>``'s ``sigcore/world/randomization.py``) set to ``1e308``, ``inf`` and
 ``-1e308`` in turn (issue 28, item 9).
 
 :data:`ATTRIBUTES` lists each attribute with a world that holds it; :func:`generate` writes one world per attribute

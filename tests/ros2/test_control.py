@@ -53,3 +53,25 @@ def test_started_paused_waits_for_play(tmp_path: Path) -> None:
         sim.stop()
     assert out["state"] == PAUSED and out["still"] == 0.0
     assert out["play"] == OK and out["played"] > 0.1
+
+
+def test_long_simulate_steps_goals_leave_the_action_services_answering(tmp_path: Path) -> None:
+    """MAX_RUNNING long simulate_steps goals run (paused, real-time pace: each would take 2000 s); one more is
+    rejected; meanwhile get_result of an unknown goal and the action node's parameter services answer within 5 s
+    (stated margin: they need only a free executor thread, which the goals never take); each goal can be canceled,
+    and afterwards a new goal is accepted and succeeds."""
+    from sigcore_ros2.action import MAX_RUNNING
+
+    sim = start_sim(tmp_path, WORLD, "--paused", "--realtime")
+    try:
+        out = sim.client("busy_actions.py", str(MAX_RUNNING), timeout=120)
+        log = sim.output()
+    finally:
+        sim.stop()
+    assert out["accepted"] == MAX_RUNNING
+    assert out["last_answered"] and not out["last_accepted"]
+    assert "at most 8 at once" in log
+    assert out["unknown_status"] == 0 and out["unknown_result_s"] < 5.0  # STATUS_UNKNOWN
+    assert out["parameters_answered"] and out["parameters_s"] < 5.0
+    assert out["canceled"] == MAX_RUNNING and out["ended"] == MAX_RUNNING
+    assert out["accepted_after"] and out["after_result"] == OK

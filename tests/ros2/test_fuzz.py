@@ -55,7 +55,7 @@ def test_fuzz_campaign_every_endpoint_answers_and_the_log_stays_small(tmp_path: 
     finally:
         sim.stop()
     assert out["requests"] >= REQUESTS
-    assert not out["unanswered"], f"no answer within {CALL_TIMEOUT} s: {out['unanswered'][:20]}"
+    assert not out["unanswered"], f"no answer within {CALL_TIMEOUT} s: {out['unanswered'][:20]} {out['detail']}"
     assert out["slowest"] < CALL_TIMEOUT
     missing = set(services) - set(out["calls"])
     assert not missing, f"services never called (not discovered?): {sorted(missing)[:10]}"

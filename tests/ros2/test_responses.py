@@ -47,8 +47,10 @@ def test_an_undeliverable_response_is_tried_again_then_dropped_with_a_warning(
     longest = 0.0
     try:
         with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
-            proc = subprocess.Popen([sys.executable, str(CLIENTS / "unmatched_call.py"), "4"], env=env, text=True,
-                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+            proc = subprocess.Popen([sys.executable, str(CLIENTS / "unmatched_call.py")], env=env, text=True,
+                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                    start_new_session=True)
+            told = False
             try:
                 end = None
                 # past GIVE_UP and a round for the last request (3 s), and on until a response was dropped, at most
@@ -57,6 +59,11 @@ def test_an_undeliverable_response_is_tried_again_then_dropped_with_a_warning(
                     t = time.monotonic()  # this thread is the simulation thread
                     transport.service(0.05)
                     longest = max(longest, time.monotonic() - t)
+                    if not told and len(requests) >= 4:  # 4 requests arrived (discovery done): the client stops
+                        assert proc.stdin is not None
+                        proc.stdin.write("stop\n")
+                        proc.stdin.flush()
+                        told = True
                     if end is None and proc.poll() is not None:
                         end = (time.monotonic() + 3.0, time.monotonic() + 30.0)
                 out, err = proc.communicate(timeout=5)
@@ -68,6 +75,7 @@ def test_an_undeliverable_response_is_tried_again_then_dropped_with_a_warning(
         transport.stop()
     assert proc.returncode == 0, err[-3000:]
     result = json.loads(out.strip().splitlines()[-1])
+    assert requests, "no request of the client arrived within 60 s"
     assert result["answered"] is False  # the client could never receive it: the case is real
     dropped = _dropped(caplog)
     assert dropped, [r.getMessage() for r in caplog.records]

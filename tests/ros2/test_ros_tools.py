@@ -137,7 +137,7 @@ def test_yaml_of_a_message_is_like_ros2_topic_echo() -> None:
     --no-arr, --no-str and --field."""
     from geometry_msgs.msg import PointStamped
     from sensor_msgs.msg import JointState
-    from sigcore_ros2.tools import YamlStyle, field_of, to_yaml
+    from sigcore_ros2.cli.yamltext import YamlStyle, field_of, to_yaml
     from std_msgs.msg import UInt8MultiArray
 
     p = PointStamped()
@@ -164,8 +164,9 @@ def test_requests_are_filled_from_yaml_and_refused_clearly() -> None:
     type are refused naming the line, the valid fields, the field and its type; a type that is not installed names
     its package."""
     from geometry_msgs.msg import Polygon
+    from sigcore_ros2.cli.messages import checked, fill, interface_class
+    from sigcore_ros2.cli.yamltext import parse_request
     from sigcore_ros2.exceptions import RosToolError
-    from sigcore_ros2.tools import checked, fill, interface_class, parse_request
     from simulation_interfaces.srv import SetEntityState
 
     req = fill(checked(SetEntityState.Request),

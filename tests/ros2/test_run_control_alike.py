@@ -79,7 +79,7 @@ def free_port() -> int:
 def test_viewer_and_simulation_interfaces_drive_the_run_control_alike(monkeypatch: pytest.MonkeyPatch) -> None:
     """The same five verbs give the same states and step counts from the viewer's buttons and from
     set_simulation_state / step_simulation / reset_simulation; every ROS 2 request is answered OK."""
-    from sigcore_viewer import viewer as v
+    from sigcore_viewer.commands import pause, play, reset, step
     from sigcore_viewer.viewer import WebViewer
 
     sim = Simulation(parse_world(WORLD), "mujoco")
@@ -88,7 +88,7 @@ def test_viewer_and_simulation_interfaces_drive_the_run_control_alike(monkeypatc
     try:
         viewer.open()
         viewer.start(sim)
-        commands = iter([v.play, v.pause, v.step(10), v.reset, v.play])
+        commands = iter([play, pause, step(10), reset, play])
         pending: list[bool] = [True]
 
         def service_viewer() -> None:  # one command per verb, as a person presses one button at a time

@@ -26,10 +26,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sigcore_viewer import playback
-from sigcore_viewer import viewer as v
+from sigcore_viewer import commands, playback
 from sigcore_viewer.browser import Browser, missing
-from sigcore_viewer.viewer import Pushed, Snapshot, WebViewer
+from sigcore_viewer.overlays import OVERLAYS
+from sigcore_viewer.snapshot import Pushed, Snapshot
+from sigcore_viewer.viewer import WebViewer
 
 from sigcore.geometry import quat_to_matrix
 from sigcore.record import Recorder
@@ -277,7 +278,7 @@ def test_the_texts_are_those_the_live_viewer_showed(tmp_path: Path) -> None:
 
     def reset_at_20_s(s: Simulation) -> None:
         if s.worlds.elapsed_steps == 10_000:
-            viewer._post(v.reset)  # as the panel's Reset does
+            viewer._post(commands.reset)  # as the panel's Reset does
 
     sim.events.subscribe("step", reset_at_20_s)
     try:
@@ -316,7 +317,7 @@ def test_the_ground_truth_is_read_exactly_and_a_cut_recording_up_to_its_cut(reco
         assert np.array_equal(whole.poses[k], np.stack([poses[n] for n in names])), k
     assert whole.tracked.all() and not whole.untracked and not whole.problems
     assert (whole.start_ns, whole.end_ns) == (0, 40 * 10**9)
-    player = playback.Player(whole, dict(v.OVERLAYS))
+    player = playback.Player(whole, dict(OVERLAYS))
     assert "cut" not in player.timeline().note
 
     cut = tmp_path / "cut"
@@ -330,7 +331,7 @@ def test_the_ground_truth_is_read_exactly_and_a_cut_recording_up_to_its_cut(reco
     assert np.array_equal(part.times, whole.times[:len(part.times)])
     assert np.array_equal(part.poses, whole.poses[:len(part.times)])
     assert part.end_ns < whole.end_ns
-    assert "The recording is cut" in playback.Player(part, dict(v.OVERLAYS)).timeline().note
+    assert "The recording is cut" in playback.Player(part, dict(OVERLAYS)).timeline().note
 
 
 def test_an_entity_deleted_while_running_is_hidden_from_then_on(tmp_path: Path) -> None:
@@ -353,7 +354,7 @@ def test_an_entity_deleted_while_running_is_hidden_from_then_on(tmp_path: Path) 
     assert np.array_equal(poses[can], truth["ground_truth/can_0"])
     poses, hidden = recorded.poses_at(round(1.5e9))
     assert hidden[can] and hidden.sum() == 1
-    player = playback.Player(recorded, dict(v.OVERLAYS))
+    player = playback.Player(recorded, dict(OVERLAYS))
     player.request(("select", "can_0"), 0.0)
     player.request(("seek", 1.5), 0.0)
     snap = player.snapshot(0.0)

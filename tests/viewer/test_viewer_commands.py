@@ -17,9 +17,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sigcore_viewer import viewer as v
+from sigcore_viewer import commands
 from sigcore_viewer.scenebuild import SceneLayout
-from sigcore_viewer.viewer import Pushed, Snapshot, WebViewer
+from sigcore_viewer.snapshot import Pushed, Snapshot
+from sigcore_viewer.viewer import WebViewer
 
 from sigcore.agent.events import Message
 from sigcore.errors import ViewerError
@@ -89,7 +90,7 @@ class Lockstep:
             time.sleep(0.002)
         pytest.fail(f"no snapshot was pushed within {TIMEOUT} s")
 
-    def run(self, command: v.Command) -> Snapshot:
+    def run(self, command: commands.Command) -> Snapshot:
         """Queue ``command`` as the panel does; the snapshot that shows its effect (a command forces one)."""
         self.viewer._post(command)
         return self.show()
@@ -151,19 +152,19 @@ def test_pause_step_n_and_play(cleanup: Simulation, lockstep: Callable[[Simulati
     changes nothing; play runs on."""
     lock = lockstep(cleanup)
     control = cleanup.control
-    snap = lock.run(v.pause)
+    snap = lock.run(commands.pause)
     assert control.paused and snap.status.startswith("**paused**")
     assert not lock.tick()
-    lock.run(v.step(5))
+    lock.run(commands.step(5))
     assert (control.paused, control.pending_steps) == (True, 5)
     for bad, shown in (("abc", "'abc'"), (0, "0"), (10**6, "1000000")):
-        snap = lock.run(v.step(bad))
+        snap = lock.run(commands.step(bad))
         assert newest_note(snap) == f"steps must be a whole number from 1 to 100000, got {shown}"
         assert (control.paused, control.pending_steps) == (True, 5)
     before = cleanup.worlds.elapsed_steps
     assert [lock.tick() for _ in range(7)] == [True] * 5 + [False] * 2
     assert cleanup.worlds.elapsed_steps == before + 5
-    snap = lock.run(v.play)
+    snap = lock.run(commands.play)
     assert not control.paused and snap.status.startswith("**running")
     assert lock.tick() and lock.tick()
 
@@ -174,15 +175,15 @@ def test_pace(cleanup: Simulation, lockstep: Callable[[Simulation], Lockstep]) -
     every valid pace and changes nothing."""
     lock = lockstep(cleanup)
     control = cleanup.control
-    snap = lock.run(v.set_pace("2x"))
+    snap = lock.run(commands.set_pace("2x"))
     assert control.realtime_factor == 2.0 and "running (2x)" in snap.status
-    lock.run(v.set_pace("as fast as possible"))
+    lock.run(commands.set_pace("as fast as possible"))
     assert control.realtime_factor is None
-    snap = lock.run(v.set_pace("3x"))
+    snap = lock.run(commands.set_pace("3x"))
     assert control.realtime_factor is None
     note = newest_note(snap)
     assert note.startswith("unknown pace '3x'; valid: ")
-    assert all(name in note for name in v.PACES)
+    assert all(name in note for name in commands.PACES)
 
 
 # ------------------------------------------------------------------ messages
@@ -193,18 +194,18 @@ def test_message_reaches_the_agent(cleanup: Simulation, lockstep: Callable[[Simu
     lock = lockstep(cleanup)
     received: list[Message] = []
     cleanup.events.subscribe("message", received.append)
-    snap = lock.run(v.send_message("robot_000", "hello"))
+    snap = lock.run(commands.send_message("robot_000", "hello"))
     assert newest_note(snap) == "sent to robot_000: hello"
     assert received == []  # queued: delivered before the next step
     assert lock.tick()
     assert [(m.sender, m.to, m.content) for m in received] == [(VIEWER_SENDER, "robot_000", "hello")]
     assert VIEWER_SENDER == "viewer"
 
-    snap = lock.run(v.send_message("ghost", "hello"))
+    snap = lock.run(commands.send_message("ghost", "hello"))
     note = newest_note(snap)
     assert note.startswith("agent 'ghost' no longer exists: the message was not sent; agents: ")
     assert all(name in note for name in cleanup.entities)
-    snap = lock.run(v.send_message("robot_000", "   "))
+    snap = lock.run(commands.send_message("robot_000", "   "))
     assert newest_note(snap) == "type a message first"
     before = cleanup.worlds.elapsed_steps
     assert lock.tick() and lock.tick()
@@ -220,7 +221,7 @@ def test_move_entity(cleanup: Simulation, lockstep: Callable[[Simulation], Locks
     lock = lockstep(cleanup)
     target, wxyz = np.array([-1.0, 0.3, 0.5]), np.array([math.cos(0.3), 0.0, 0.0, math.sin(0.3)])
     steps = cleanup.worlds.elapsed_steps
-    snap = lock.run(v.move_entity("can_0", target, wxyz))
+    snap = lock.run(commands.move_entity("can_0", target, wxyz))
     assert cleanup.worlds.elapsed_steps == steps
     pos, quat = cleanup.backend.get_pose("can_0")
     np.testing.assert_allclose(pos, target, atol=1e-6)
@@ -232,7 +233,7 @@ def test_move_entity(cleanup: Simulation, lockstep: Callable[[Simulation], Locks
     np.testing.assert_allclose(np.concatenate(node), np.concatenate([target, wxyz]), atol=1e-6)
 
     table_pos, table_quat = (np.array(a) for a in cleanup.backend.get_pose("table_0"))
-    snap = lock.run(v.move_entity("table_0", target, wxyz))
+    snap = lock.run(commands.move_entity("table_0", target, wxyz))
     assert newest_note(snap).startswith("table_0 is static (fixed in place): it cannot be dragged")
     pos, quat = cleanup.backend.get_pose("table_0")
     assert np.array_equal(pos, table_pos) and np.array_equal(quat, table_quat)
@@ -255,7 +256,7 @@ def test_reset_during_a_grasp(cleanup: Simulation, lockstep: Callable[[Simulatio
             break
         assert lock.tick()
     assert "robot_000 grasped can_0" in lock.show().texts["events"]
-    snap = lock.run(v.reset)
+    snap = lock.run(commands.reset)
     assert newest_note(snap) == "reset to the start: robot_000 let go of can_0"
     assert cleanup.entities.grasps.items() == []
     np.testing.assert_allclose(cleanup.backend.get_pose("can_0")[0], start, atol=1e-3)

@@ -27,7 +27,7 @@ import viser
 import websockets
 from sigcore_viewer.front import Front
 from sigcore_viewer.scenebuild import layout_of
-from sigcore_viewer.viewer import Snapshot
+from sigcore_viewer.snapshot import Snapshot
 from viser.infra._async_message_buffer import AsyncMessageBuffer
 
 from sigcore.sim import Simulation

@@ -1,4 +1,4 @@
-"""``sigcore run --viewer`` after the run (``--viewer-linger``, ``sigcore/cli_linger.py``), without a browser: a run
+"""``sigcore run --viewer`` after the run (``--viewer-linger``, ``sigcore/cli/linger.py``), without a browser: a run
 without a terminal ends at once, ``--viewer-linger S`` keeps the process (and the page) up S seconds, Enter in a
 terminal ends the wait, a signal ends it, and the exit code is still the task's verdict. Real processes, a real
 viewer process and viser server; the terminal is a real pseudo-terminal (``pty``)."""

@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from sigcore_viewer.viewer import Pushed, Snapshot, WebViewer
+from sigcore_viewer.snapshot import Pushed, Snapshot
+from sigcore_viewer.viewer import WebViewer
 
 from sigcore.geometry import quat_to_matrix
 from sigcore.publish import Publication

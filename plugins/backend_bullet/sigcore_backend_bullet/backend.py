@@ -41,24 +41,23 @@ import numpy as np
 import numpy.typing as npt
 import pybullet as pb
 
-from sigcore.backend import GROUND, MAIN, Array, Backend, Renderer, find_entity
+from sigcore.backend import GROUND, MAIN, Array, Renderer
 from sigcore.errors import BackendError, BackendRefusal
-from sigcore.geometry import cross
 from sigcore.world.models import Human, Object, Robot, World
 
 from . import grasp, rays
 from .builder import build_entity, build_world
 from .contacts import ContactMap
-from .frames import compose, invert, to_wxyz, to_xyzw
-from .layout import BASE, EntityIndex, JointIndex
+from .joints import BulletJoints
+from .layout import BASE, EntityIndex
+from .modes import BulletModes
 from .pairs import PairFilters
 from .servo import ServoBank
+from .state import BulletState
 
-_ORIGIN = (0.0, 0.0, 0.0)
 
-
-class BulletBackend(Backend):
-    """PyBullet physics. See the module docstring for how each feature is done.
+class BulletBackend(BulletState, BulletModes, BulletJoints):
+    """PyBullet physics. See the module docstring for how each feature is done; the parts are mixins (:mod:`.base`).
 
     Attributes:
         client: The PyBullet physics client id (after :meth:`build`), for reading (e.g. rendering); writing
@@ -114,16 +113,16 @@ class BulletBackend(Backend):
         except BackendError:
             self.close()
             raise
-        self._entities: dict[str, EntityIndex] = {e.name: e for e in entities}
+        self._entities = {e.name: e for e in entities}
         self._pairs = PairFilters()  # the client is new or was reset: it holds no pair entry
-        self._collision_off: set[str] = set()
+        self._collision_off = set()
         self._index()
         self._built = True
         self._restart_motors()
         self._state0 = pb.saveState(physicsClientId=c)
         self._filters_changed = False
         self._entities_changed = False
-        self._frozen: set[str] = set()
+        self._frozen = set()
         self._restart()
 
     def _index(self) -> None:
@@ -154,14 +153,14 @@ class BulletBackend(Backend):
         self._contacts: frozenset[tuple[int, int]] = frozenset()
         self._grasps: dict[tuple[str, str, str], int] = {}
         self._mass = {n: list(e.masses0) for n, e in self._entities.items()}
-        self._nograv: set[str] = set()
-        self._held: dict[str, tuple[list[float], list[float], list[float]]] = {}
+        self._nograv = set()
+        self._held = {}
         for e in self._entities.values():
             if e.held0:
                 self._hold(e, initial=True)
 
     def _restart_motors(self) -> None:
-        self._servos: dict[str, ServoBank] = {}
+        self._servos = {}
         for e in self._entities.values():
             self._start_motors(e)
 
@@ -181,14 +180,6 @@ class BulletBackend(Backend):
             else:
                 j.initial = float(pb.getJointState(e.body, j.index, physicsClientId=c)[0])
                 self._position_servo(e, j, j.initial)
-
-    def _position_servo(self, e: EntityIndex, j: JointIndex, angle: float) -> None:
-        self._servos[e.name].hold(j.index, angle)  # the motor is set before each step (see servo.py)
-
-    def _wake(self) -> None:
-        """Something may push an arm: every servo bank updates its motors again (see servo.py)."""
-        for bank in self._servos.values():
-            bank.wake()
 
     def step(self) -> None:
         """Advance by one timestep (``stepSimulation``), compensating gravity and restoring held entities."""
@@ -224,26 +215,6 @@ class BulletBackend(Backend):
                 pb.resetBaseVelocity(e.body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)
             for j, q in zip(e.joints.values(), angles, strict=True):
                 pb.resetJointState(e.body, j.index, q, 0.0, physicsClientId=c)
-
-    def _hold(self, e: EntityIndex, initial: bool = False) -> None:
-        """Dynamics off: a single-link body becomes static (zero mass: nothing to do per step, as a static object
-        costs); anything else is put back where it is now after every step (see ``_restore_held``)."""
-        c = self.client
-        if len(e.links) == 1 and not e.welded:
-            if e.name not in self._frozen:
-                pb.resetBaseVelocity(e.body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)
-                pb.changeDynamics(e.body, BASE, mass=0.0, physicsClientId=c)
-                self._filter(e, e.name not in self._collision_off)  # PyBullet gave it the default static filter
-                self._frozen.add(e.name)
-                self._filters_changed |= not initial  # it was re-inserted in the broadphase: reset rebuilds
-            return
-        pos, orn = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)
-        angles = [float(pb.getJointState(e.body, j.index, physicsClientId=c)[0]) for j in e.joints.values()]
-        self._held[e.name] = (list(pos), list(orn), angles)
-        if not e.welded:
-            pb.resetBaseVelocity(e.body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)
-        for j, q in zip(e.joints.values(), angles, strict=True):
-            pb.resetJointState(e.body, j.index, q, 0.0, physicsClientId=c)
 
     def reset(self) -> None:
         """Back to the state right after build.
@@ -352,246 +323,6 @@ class BulletBackend(Backend):
     def joints(self, entity: str) -> list[str]:
         """Movable joints of a robot in URDF order; empty for objects and humans."""
         return list(self._entity(entity).joints)
-
-    def _client(self) -> int:
-        self.require_world()
-        return self.client
-
-    def _entity(self, name: str) -> EntityIndex:
-        self.require_world()
-        return find_entity(self._entities, name)
-
-    # ------------------------------------------------------------------ state
-    def _frame(self, e: EntityIndex, link: int) -> tuple[Sequence[float], Sequence[float]]:
-        """World pose of a link's URDF frame, ``(x, y, z, w)``."""
-        c = self.client
-        if link == BASE:
-            pos, orn = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)
-            inv_pos, inv_orn = invert(e.local_pos, e.local_orn)
-            return compose(pos, orn, inv_pos, inv_orn)
-        state = pb.getLinkState(e.body, link, computeForwardKinematics=1, physicsClientId=c)
-        return state[4], state[5]
-
-    def get_pose(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
-        """World position [m] and orientation (w, x, y, z) of the part's URDF link frame."""
-        e = self._entity(entity)
-        pos, orn = self._frame(e, e.link(part))
-        return np.array(pos, dtype=np.float64), to_wxyz(orn)
-
-    def set_pose(self, entity: str, position: Array | None = None, quaternion: Array | None = None) -> None:
-        """Teleport the base so that its URDF frame has this pose (``resetBasePositionAndOrientation``)."""
-        self._wake()
-        e = self._entity(entity)
-        pos, orn = self._frame(e, BASE)
-        new_pos = [float(x) for x in position] if position is not None else list(pos)
-        new_orn = to_xyzw(quaternion) if quaternion is not None else list(orn)
-        ipos, iorn = compose(new_pos, new_orn, e.local_pos, e.local_orn)
-        pb.resetBasePositionAndOrientation(e.body, ipos, iorn, physicsClientId=self.client)
-        if e.name in self._held:
-            self._hold(e)
-        self._tick += 1
-
-    def get_velocity(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
-        """Linear [m/s] and angular [rad/s] velocity of the part's frame origin: ``v_com + w x (o - com)``."""
-        e = self._entity(entity)
-        link = e.link(part)
-        c = self.client
-        if link == BASE:
-            lin, ang = pb.getBaseVelocity(e.body, physicsClientId=c)
-            if e.local_pos == _ORIGIN:  # the frame origin is the centre of mass (a primitive object)
-                return np.array(lin, dtype=np.float64), np.array(ang, dtype=np.float64)
-            com = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)[0]
-            origin = self._frame(e, BASE)[0]
-        else:
-            s = pb.getLinkState(e.body, link, computeLinkVelocity=1, computeForwardKinematics=1,
-                                physicsClientId=c)
-            com, origin, lin, ang = s[0], s[4], s[6], s[7]
-        w = np.array(ang, dtype=np.float64)
-        v = np.array(lin, dtype=np.float64) + cross(ang, tuple(o - p for o, p in zip(origin, com, strict=True)))
-        return v, w
-
-    def set_velocity(self, entity: str, linear: Array | None = None, angular: Array | None = None) -> None:
-        """Set the base's velocity (``resetBaseVelocity`` at its centre of mass); no effect if welded."""
-        self._wake()
-        e = self._entity(entity)
-        if e.welded:
-            return
-        lin0, ang0 = self.get_velocity(entity)
-        lin = np.asarray(linear, dtype=np.float64) if linear is not None else lin0
-        ang = np.asarray(angular, dtype=np.float64) if angular is not None else ang0
-        c = self.client
-        com = pb.getBasePositionAndOrientation(e.body, physicsClientId=c)[0]
-        origin = self._frame(e, BASE)[0]
-        v_com = lin + cross(ang, np.subtract(com, origin))
-        pb.resetBaseVelocity(e.body, v_com.tolist(), ang.tolist(), physicsClientId=c)
-        self._tick += 1
-
-    def get_com(self, entity: str, part: str | None = None) -> Array:
-        """Centre of mass [m] of a robot link, or of a whole object or human (all its links)."""
-        e = self._entity(entity)
-        link = e.link(part)
-        c = self.client
-        if e.kind == "robot" or len(e.links) == 1:
-            return np.array(grasp.inertial_pose(c, e.body, link)[0], dtype=np.float64)
-        masses = np.array(self._mass[entity])
-        coms = np.array([grasp.inertial_pose(c, e.body, k)[0] for k in e.links])
-        total = float(masses.sum())
-        return (masses @ coms) / total if total > 0 else coms[0]
-
-    def apply_wrench(self, entity: str, part: str | None, force: Array, torque: Array) -> None:
-        """``applyExternalForce`` at the link's centre of mass and ``applyExternalTorque``, world frame."""
-        self._wake()
-        e = self._entity(entity)
-        link = e.link(part)
-        c = self.client
-        if np.any(force):
-            com = grasp.inertial_pose(c, e.body, link)[0]
-            pb.applyExternalForce(e.body, link, [float(x) for x in force], com, pb.WORLD_FRAME, physicsClientId=c)
-        if np.any(torque):
-            pb.applyExternalTorque(e.body, link, [float(x) for x in torque], pb.WORLD_FRAME, physicsClientId=c)
-
-    # ------------------------------------------------------------------ properties and modes
-    def get_mass(self, entity: str) -> float:
-        """Sum of the masses [kg] of the entity's links."""
-        return float(sum(self._mass[self._entity(entity).name]))
-
-    def set_mass(self, entity: str, mass: float) -> None:
-        """Scale every link's mass and inertia so that they total ``mass`` [kg] (``changeDynamics``)."""
-        self._wake()
-        e = self._entity(entity)
-        masses = self._mass[entity]
-        total = sum(masses)
-        if total <= 0.0:
-            raise BackendRefusal(f"{e.kind} '{e.name}' has no mass to scale (its URDF has no <inertial>)")
-        factor = mass / total
-        for i, link in enumerate(e.links):
-            masses[i] *= factor
-            if not e.static and masses[i] > 0.0 and e.name not in self._frozen:  # frozen: mass back when freed
-                inertia = [x * masses[i] / e.masses0[i] for x in e.inertia0[i]]
-                pb.changeDynamics(e.body, link, mass=masses[i], localInertiaDiagonal=inertia,
-                                  physicsClientId=self.client)
-
-    def set_gravity_mode(self, entity: str, enabled: bool) -> None:
-        """Gravity off: a force ``-m g`` at every link's centre of mass before each step."""
-        self._wake()
-        e = self._entity(entity)
-        if enabled:
-            self._nograv.discard(e.name)
-        else:
-            self._nograv.add(e.name)
-
-    def set_dynamics_mode(self, entity: str, enabled: bool) -> None:
-        """Dynamics off holds the base and every joint where they are now.
-
-        Raises:
-            BackendRefusal: enabling dynamics of a static object (PyBullet holds it with mass 0).
-        """
-        self._wake()
-        e = self._entity(entity)
-        if e.static:
-            if enabled:
-                raise BackendRefusal(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "
-                                   "cannot become dynamic; move it with set_pose")
-            return
-        if enabled:
-            self._held.pop(e.name, None)
-            if e.name in self._frozen:
-                self._frozen.discard(e.name)
-                mass, mass0 = self._mass[e.name][0], e.masses0[0]
-                inertia = [x * mass / mass0 for x in e.inertia0[0]] if mass0 > 0.0 else list(e.inertia0[0])
-                pb.changeDynamics(e.body, BASE, mass=mass, localInertiaDiagonal=inertia, physicsClientId=self.client)
-                self._filter(e, e.name not in self._collision_off)
-                self._filters_changed = True
-        else:
-            self._hold(e)
-            self._tick += 1
-
-    def set_collision_mode(self, entity: str, enabled: bool) -> None:
-        """Collision off puts every link in a filter group that collides with nothing (rays still see it; see the
-        table in :mod:`.layout`)."""
-        self._wake()
-        e = self._entity(entity)
-        if enabled == (e.name not in self._collision_off):
-            return
-        if enabled:
-            self._collision_off.discard(e.name)
-        else:
-            self._collision_off.add(e.name)
-        self._filters_changed = True
-        self._filter(e, enabled)
-
-    def _filter(self, e: EntityIndex, enabled: bool) -> None:
-        for link in e.links:
-            pb.setCollisionFilterGroupMask(e.body, link, *e.filter_bits(link, enabled), physicsClientId=self.client)
-        self._sync_pairs()
-
-    def _bits(self, e: EntityIndex, link: int) -> tuple[int, int]:
-        """Collision ``(group, mask)`` of a link as the entity's collision mode says now."""
-        return e.filter_bits(link, e.name not in self._collision_off)
-
-    def _sync_pairs(self) -> None:
-        """Pair filter entries back to the groups and masks (see :mod:`.pairs`)."""
-        self._pairs.sync(self.client, {e.body: e for e in self._entities.values()}, self._bits)
-
-    # ------------------------------------------------------------------ joints
-    def get_joint_angle(self, entity: str, joint: str) -> float:
-        """``getJointState`` position [rad] or [m]."""
-        e = self._entity(entity)
-        return float(pb.getJointState(e.body, e.joint(joint).index, physicsClientId=self.client)[0])
-
-    def set_joint_angle(self, entity: str, joint: str, angle: float) -> None:
-        """``resetJointState`` (velocity 0); an arm joint's position servo then holds ``angle``."""
-        e = self._entity(entity)
-        j = e.joint(joint)
-        pb.resetJointState(e.body, j.index, angle, 0.0, physicsClientId=self.client)
-        if not j.wheel:
-            self._position_servo(e, j, angle)
-        if e.name in self._held:
-            self._hold(e)
-        self._tick += 1
-
-    def get_joint_velocity(self, entity: str, joint: str) -> float:
-        """``getJointState`` velocity [rad/s] or [m/s]."""
-        e = self._entity(entity)
-        return float(pb.getJointState(e.body, e.joint(joint).index, physicsClientId=self.client)[1])
-
-    def set_joint_target(self, entity: str, joint: str, angle: float) -> None:
-        """Position servo towards ``angle``.
-
-        Raises:
-            BackendRefusal: the joint is a drive wheel (always a velocity servo).
-        """
-        e = self._entity(entity)
-        j = e.joint(joint)
-        if j.wheel:
-            arms = [n for n, x in e.joints.items() if not x.wheel]
-            raise BackendRefusal(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
-                               f"use set_joint_velocity; joints with position control: "
-                               f"{', '.join(arms) or 'none'}")
-        self._position_servo(e, j, angle)
-
-    def set_joint_velocity(self, entity: str, joint: str, velocity: float,
-                           max_torque: float | None = None) -> None:
-        """``VELOCITY_CONTROL`` at ``velocity`` with force ``max_torque`` (default: the drive's or the gains')."""
-        e = self._entity(entity)
-        j = e.joint(joint)
-        torque = j.max_torque if max_torque is None else max_torque
-        if not j.wheel:
-            self._servos[e.name].release(j.index)
-        pb.setJointMotorControl2(e.body, j.index, pb.VELOCITY_CONTROL, targetVelocity=velocity, force=torque,
-                                 physicsClientId=self.client)
-
-    def add_joint_torque(self, entity: str, joint: str, torque: float) -> None:
-        """``TORQUE_CONTROL`` for the next step (on top of the joint's motor)."""
-        self._wake()
-        e = self._entity(entity)
-        pb.setJointMotorControl2(e.body, e.joint(joint).index, pb.TORQUE_CONTROL, force=torque,
-                                 physicsClientId=self.client)
-
-    def get_joint_position(self, entity: str, joint: str) -> Array:
-        """World position [m] of the joint anchor: the child link's URDF frame origin."""
-        e = self._entity(entity)
-        return np.array(self._frame(e, e.joint(joint).index)[0], dtype=np.float64)
 
     # ------------------------------------------------------------------ grasping
     def attach(self, entity: str, part: str, obj: str) -> None:

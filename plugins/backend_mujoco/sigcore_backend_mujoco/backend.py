@@ -35,10 +35,8 @@ import mujoco
 import numpy as np
 import numpy.typing as npt
 
-from sigcore.backend import Array, Backend, Renderer, find_entity
+from sigcore.backend import Array, Renderer
 from sigcore.errors import BackendError, BackendRefusal
-from sigcore.geometry import normalized as unit
-from sigcore.geometry import quat_to_matrix
 from sigcore.world.models import World
 
 from . import grasp
@@ -46,13 +44,14 @@ from .builder import add_to_spec, build_spec, rebuild_spec
 from .carry import carry_data, carry_model, element_map, warm_start
 from .collision import CollisionBits
 from .contacts import ContactMap
-from .layout import EntityIndex, Layout
+from .joints import MujocoJoints
+from .layout import Layout
+from .modes import MujocoModes
 from .plan import EntityPlan, WeldPlan
 from .rays import RayCaster
-from .recompile import compile_world, scale_mass
-from .servo import ArmServo
+from .recompile import compile_world
+from .state import MujocoState
 
-_NO_INTS = np.zeros(0, dtype=np.int64)
 log = logging.getLogger("sigcore.backend.mujoco")
 
 STABILITY_CHECK_MASK = 255
@@ -60,8 +59,9 @@ STABILITY_CHECK_MASK = 255
 0.5 s at the default timestep: reading it every step would cost 1 % of the step)."""
 
 
-class MujocoBackend(Backend):
-    """MuJoCo physics (the default backend). See the module docstring for how each feature is done.
+class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
+    """MuJoCo physics (the default backend). See the module docstring for how each feature is done; the parts are
+    mixins (:mod:`.base`).
 
     Attributes:
         model: The compiled ``mujoco.MjModel`` (after :meth:`build`; a fresh copy after :meth:`reset`).
@@ -99,11 +99,10 @@ class MujocoBackend(Backend):
         self._spec, self._plans, self._welds = spec, plans, welds
         self.model, self._model0, self.data = model, model0, data
         self._layout: Layout = layout
-        self._entities: dict[str, EntityIndex] = layout.entities
-        self._pose_rows: dict[tuple[tuple[str, str | None], ...], np.ndarray] = {}
-        """:meth:`get_poses`' body indices per list of parts asked for (a viewer's, a recorder's), for this model."""
+        self._entities = layout.entities
+        self._pose_rows = {}
         self._contact_map = ContactMap(layout.geom_part, layout.part_entity)
-        self._scratch: mujoco.MjData | None = None
+        self._scratch = None
         self._servos = [j.servo for e in self._entities.values() for j in e.joints.values()]
 
     def _restart(self) -> None:
@@ -118,7 +117,7 @@ class MujocoBackend(Backend):
         self._contacts_tick = -1
         self._contacts: frozenset[tuple[int, int]] = frozenset()
         self._applied = False
-        self._held: set[str] = {e.name for e in self._entities.values() if e.held0}
+        self._held = {e.name for e in self._entities.values() if e.held0}
         self._hold = d.qpos.copy()
         self._rebuild_held()
         mujoco.mj_forward(m, d)
@@ -254,214 +253,6 @@ class MujocoBackend(Backend):
         """Movable joints of a robot in URDF order; empty for objects and humans."""
         return list(self._entity(entity).joints)
 
-    def _entity(self, name: str) -> EntityIndex:
-        self.require_world()
-        return find_entity(self._entities, name)
-
-    def _sync(self) -> None:
-        """Bring poses, centres of mass and velocities in ``data`` up to date with ``qpos``/``qvel``."""
-        if self._synced != self._tick:
-            m, d = self.model, self.data
-            mujoco.mj_kinematics(m, d)
-            mujoco.mj_comPos(m, d)
-            mujoco.mj_comVel(m, d)
-            self._synced = self._tick
-
-    # ------------------------------------------------------------------ state
-    def get_pose(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
-        """World position [m] and orientation (w, x, y, z) of the part's body frame (the URDF link frame)."""
-        body = self._entity(entity).body(part)
-        self._sync()
-        return self.data.xpos[body].copy(), self.data.xquat[body].copy()
-
-    def get_poses(self, parts: Sequence[tuple[str, str | None]]) -> Array:
-        """Every part's pose from ``xpos``/``xquat`` in one indexing (about a tenth of a call per part); the body
-        indices of a list of parts asked for again (a viewer's, a recorder's every frame) are looked up once."""
-        key = parts if isinstance(parts, tuple) else tuple(parts)
-        bodies = self._pose_rows.get(key)
-        if bodies is None:
-            bodies = np.array([self._entity(entity).body(part) for entity, part in key], dtype=np.intp)
-            if len(self._pose_rows) >= 32:
-                self._pose_rows.clear()
-            self._pose_rows[key] = bodies
-        self._sync()
-        out = np.empty((len(bodies), 7))
-        out[:, :3] = self.data.xpos[bodies]
-        out[:, 3:] = self.data.xquat[bodies]
-        return out
-
-    def set_pose(self, entity: str, position: Array | None = None, quaternion: Array | None = None) -> None:
-        """Teleport the main part: its free joint's ``qpos``, or ``body_pos``/``body_quat`` if welded."""
-        e = self._entity(entity)
-        if e.welded:
-            if position is not None:
-                self.model.body_pos[e.root] = position
-            if quaternion is not None:
-                self.model.body_quat[e.root] = unit(quaternion)
-        else:
-            a = e.free_qpos
-            if position is not None:
-                self.data.qpos[a:a + 3] = position
-            if quaternion is not None:
-                self.data.qpos[a + 3:a + 7] = unit(quaternion)
-            self._update_hold(e)
-        self._tick += 1
-
-    def get_velocity(self, entity: str, part: str | None = None) -> tuple[Array, Array]:
-        """Linear [m/s] and angular [rad/s] velocity of the part's frame origin, world frame."""
-        body = self._entity(entity).body(part)
-        self._sync()
-        res = np.zeros(6)
-        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_XBODY, body, res, 0)
-        return res[3:6].copy(), res[0:3].copy()
-
-    def set_velocity(self, entity: str, linear: Array | None = None, angular: Array | None = None) -> None:
-        """Set the free joint's velocity (its angular part is body-local in MuJoCo); no effect if welded."""
-        e = self._entity(entity)
-        if e.welded:
-            return
-        d, v = self.data, e.free_dof
-        if linear is not None:
-            d.qvel[v:v + 3] = linear
-        if angular is not None:
-            rot = quat_to_matrix(unit(d.qpos[e.free_qpos + 3:e.free_qpos + 7]))
-            d.qvel[v + 3:v + 6] = rot.T @ np.asarray(angular, dtype=np.float64)
-        self._tick += 1
-
-    def get_com(self, entity: str, part: str | None = None) -> Array:
-        """Centre of mass [m] of a robot link, or of a whole object or human (all its bodies)."""
-        e = self._entity(entity)
-        body = e.body(part)
-        self._sync()
-        if e.kind != "robot":
-            return self.data.subtree_com[e.root].copy()
-        return self.data.xipos[body].copy()
-
-    def apply_wrench(self, entity: str, part: str | None, force: Array, torque: Array) -> None:
-        """Add to ``xfrc_applied`` of the part's body (at its centre of mass) for the next step."""
-        body = self._entity(entity).body(part)
-        self.data.xfrc_applied[body, 0:3] += force
-        self.data.xfrc_applied[body, 3:6] += torque
-        self._applied = self._post = True
-
-    # ------------------------------------------------------------------ properties and modes
-    def get_mass(self, entity: str) -> float:
-        """Sum of the masses [kg] of the entity's bodies."""
-        return float(self.model.body_mass[self._entity(entity).bodies].sum())
-
-    def set_mass(self, entity: str, mass: float) -> None:
-        """Scale every body's mass and inertia so that they total ``mass`` [kg]; then ``mj_setConst``."""
-        e = self._entity(entity)
-        if float(self.model.body_mass[e.bodies].sum()) <= 0.0:
-            raise BackendRefusal(f"{e.kind} '{e.name}' has no mass to scale (its URDF has no <inertial>)")
-        self._scale_mass(e, mass)
-
-    def _scale_mass(self, e: EntityIndex, mass: float) -> None:
-        self._scratch = scale_mass(self.model, e, mass, self._scratch)
-
-    def set_gravity_mode(self, entity: str, enabled: bool) -> None:
-        """Gravity off: ``body_gravcomp = 1`` on every body of the entity (and ``flg_gravcomp`` on)."""
-        e = self._entity(entity)
-        m = self.model
-        m.body_gravcomp[e.bodies] = 0.0 if enabled else 1.0
-        m.flg_gravcomp = bool(np.any(m.body_gravcomp))
-
-    def set_dynamics_mode(self, entity: str, enabled: bool) -> None:
-        """Dynamics off holds every joint of the entity (free joint included) where it is now.
-
-        Raises:
-            BackendRefusal: enabling dynamics of a static object (it has no joints).
-        """
-        e = self._entity(entity)
-        if e.qpos.size == 0:
-            if enabled:
-                raise BackendRefusal(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "
-                                   "cannot become dynamic; move it with set_pose")
-            return
-        if enabled:
-            self._held.discard(e.name)
-        else:
-            self._held.add(e.name)
-            self._hold[e.qpos] = self.data.qpos[e.qpos]
-            self.data.qvel[e.dofs] = 0.0
-            self._tick += 1
-        self._rebuild_held()
-
-    def _rebuild_held(self) -> None:
-        held = [self._entities[n] for n in sorted(self._held)]
-        self._held_qpos = np.concatenate([e.qpos for e in held]) if held else _NO_INTS
-        self._held_dofs = np.concatenate([e.dofs for e in held]) if held else _NO_INTS
-        self._held_values = self._hold[self._held_qpos]
-        self._post = bool(self._held_qpos.size) or self._applied
-
-    def _update_hold(self, e: EntityIndex) -> None:
-        if e.name in self._held:
-            self._hold[e.qpos] = self.data.qpos[e.qpos]
-            self.data.qvel[e.dofs] = 0.0
-            self._held_values = self._hold[self._held_qpos]
-
-    def set_collision_mode(self, entity: str, enabled: bool) -> None:
-        """Collision off zeroes ``contype``/``conaffinity`` of the entity's geoms; on restores them."""
-        e = self._entity(entity)
-        if enabled:
-            self._bits.disabled.discard(e.name)
-        else:
-            self._bits.disabled.add(e.name)
-        self._bits.apply(self.model, e)
-
-    # ------------------------------------------------------------------ joints
-    def get_joint_angle(self, entity: str, joint: str) -> float:
-        """``qpos`` of the joint [rad] or [m]."""
-        return float(self.data.qpos[self._entity(entity).joint(joint).qpos])
-
-    def set_joint_angle(self, entity: str, joint: str, angle: float) -> None:
-        """Set ``qpos`` (and zero ``qvel``) of the joint; an arm joint's servo then holds ``angle``."""
-        e = self._entity(entity)
-        j = e.joint(joint)
-        self.data.qpos[j.qpos] = angle
-        self.data.qvel[j.dof] = 0.0
-        if isinstance(j.servo, ArmServo):
-            j.servo.hold(self.model, self.data, angle)
-        self._update_hold(e)
-        self._tick += 1
-
-    def get_joint_velocity(self, entity: str, joint: str) -> float:
-        """``qvel`` of the joint [rad/s] or [m/s]."""
-        return float(self.data.qvel[self._entity(entity).joint(joint).dof])
-
-    def set_joint_target(self, entity: str, joint: str, angle: float) -> None:
-        """Position servo towards ``angle``.
-
-        Raises:
-            BackendRefusal: the joint is a drive wheel (always a velocity servo).
-        """
-        e = self._entity(entity)
-        j = e.joint(joint)
-        if not isinstance(j.servo, ArmServo):
-            arms = [n for n, x in e.joints.items() if isinstance(x.servo, ArmServo)]
-            raise BackendRefusal(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
-                               f"use set_joint_velocity; joints with position control: "
-                               f"{', '.join(arms) or 'none'}")
-        j.servo.hold(self.model, self.data, angle)
-
-    def set_joint_velocity(self, entity: str, joint: str, velocity: float,
-                           max_torque: float | None = None) -> None:
-        """Velocity mode at ``velocity``, limited to ``max_torque`` (default: the drive's or the gains')."""
-        j = self._entity(entity).joint(joint)
-        j.servo.drive(self.model, self.data, velocity, max_torque)
-
-    def add_joint_torque(self, entity: str, joint: str, torque: float) -> None:
-        """Add to ``qfrc_applied`` of the joint's dof for the next step."""
-        j = self._entity(entity).joint(joint)
-        self.data.qfrc_applied[j.dof] += torque
-        self._applied = self._post = True
-
-    def get_joint_position(self, entity: str, joint: str) -> Array:
-        """World position [m] of the joint anchor (``xanchor``)."""
-        j = self._entity(entity).joint(joint)
-        self._sync()
-        return self.data.xanchor[j.jnt].copy()
-
     # ------------------------------------------------------------------ grasping
     def attach(self, entity: str, part: str, obj: str) -> None:
         """Switch on the weld of ``part`` and ``obj`` at their current relative pose (see :mod:`.grasp`)."""
@@ -514,4 +305,3 @@ class MujocoBackend(Backend):
         geoms = self._entity(exclude).geoms if exclude is not None else None
         self._sync()
         return self._rays.cast(self.model, self.data, origin, directions, max_range, geoms)
-

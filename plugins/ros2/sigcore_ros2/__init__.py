@@ -36,6 +36,6 @@ def sigcore_register_features(register: Callable[[type[Feature]], None]) -> None
 def sigcore_register_commands(cli: Any) -> None:
     """``sigcore ros ...`` (topics, echo, hz, call, record: ROS 2 introspection for pip-only users) and
     ``sigcore bag play`` (a recording published on ROS 2); rclpy is imported only when one of them runs."""
-    from .commands import register
+    from .cli.commands import register
 
     register(cli)

@@ -22,6 +22,14 @@ log = logging.getLogger("sigcore.ros2")
 
 FEEDBACK_DEPTH = 1000
 """History of the simulate_steps feedback publisher (reliable): a client that keeps up gets every step's feedback."""
+MAX_RUNNING = 8
+"""Most simulate_steps goals running at once [goals]; a goal beyond them is rejected. Each running goal holds one
+executor thread while it waits for its steps; the executor has :data:`FREE_THREADS` more, so the action's own
+services (get_result, cancel_goal, send_goal) and the node's parameter services always have a thread to answer on."""
+FREE_THREADS = 4
+"""Executor threads never held by a running goal [threads]."""
+THREADS = MAX_RUNNING + FREE_THREADS
+"""Threads of the action node's executor [threads]."""
 
 
 def _result(code: int, message: str = "") -> Result:
@@ -46,13 +54,33 @@ class SimulateStepsAction:
         self.submit = submit
         self.closing = False
         self.SimulateSteps = SimulateSteps
+        self._running = 0
+        self._lock = threading.Lock()
+        self._accept, self._reject = GoalResponse.ACCEPT, GoalResponse.REJECT
         self.server = ActionServer(node, SimulateSteps, name, execute_callback=self._execute,
-                                   goal_callback=lambda _g: GoalResponse.ACCEPT,
+                                   goal_callback=self._goal,
                                    cancel_callback=lambda _g: CancelResponse.ACCEPT,
                                    callback_group=ReentrantCallbackGroup(),
                                    feedback_pub_qos_profile=QoSProfile(depth=FEEDBACK_DEPTH))
 
+    def _goal(self, _request: Any) -> Any:
+        """Accept a goal while fewer than :data:`MAX_RUNNING` run (it counts as running from here on)."""
+        with self._lock:
+            if self._running >= MAX_RUNNING:
+                log.warning("simulate_steps: a goal was rejected: %d goals are running (at most %d at once)",
+                            self._running, MAX_RUNNING, extra=log_key("simulate_steps", "too many goals"))
+                return self._reject
+            self._running += 1
+            return self._accept
+
     def _execute(self, goal: Any) -> Any:
+        try:
+            return self._run(goal)
+        finally:
+            with self._lock:
+                self._running -= 1
+
+    def _run(self, goal: Any) -> Any:
         action = self.SimulateSteps
         steps = int(goal.request.steps)
         finished = threading.Event()
@@ -95,7 +123,16 @@ class SimulateStepsAction:
 
             outcome["waiter"] = i.add_steps(steps, done, progress)
 
-        self.submit(start)
+        def guarded_start() -> None:
+            try:
+                start()
+            except Exception as e:  # the goal ends (its thread is freed); the receiver logs the error
+                outcome.setdefault("result", _result(Result.RESULT_OPERATION_FAILED,
+                                                     f"simulate_steps failed: {type(e).__name__}: {clip(str(e), 200)}"))
+                finished.set()
+                raise
+
+        self.submit(guarded_start)
         canceled = False
         while not finished.wait(0.02):
             if self.closing:

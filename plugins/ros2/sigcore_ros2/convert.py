@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import array
-import importlib
 import math
 from typing import Any
 
@@ -14,6 +13,7 @@ from pydantic import BaseModel
 from sigcore.api.table import ApiEntry
 from sigcore.publish import Offered
 
+from .cli.messages import message_class
 from .publications import fill_message
 
 
@@ -32,9 +32,8 @@ def ros_type(entry: ApiEntry, kind: str) -> Any:
         kind: ``msg`` or ``srv``.
     """
     if "/" in entry.ros_type:
-        package, sub, name = entry.ros_type.split("/")
-        return getattr(importlib.import_module(f"{package}.{sub}"), name)
-    return getattr(importlib.import_module(f"sigcore_msgs.{kind}"), entry.ros_type)
+        return message_class(entry.ros_type)
+    return message_class(f"sigcore_msgs/{kind}/{entry.ros_type}")
 
 
 def to_dict(msg: Any, model: type[BaseModel]) -> dict[str, Any]:

@@ -8,7 +8,6 @@ QoS of its class, and every pushed field dictionary is filled into a message of 
 from __future__ import annotations
 
 import array
-import importlib
 import logging
 import time
 from collections.abc import Callable, Collection
@@ -17,6 +16,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from sigcore.publish import Publication, PublicationSink
+
+from .cli.messages import message_class
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -28,17 +29,6 @@ log = logging.getLogger("sigcore.ros2")
 _ARRAY_CODES = {"float": "f", "double": "d", "int8": "b", "uint8": "B", "int16": "h", "uint16": "H",
                 "int32": "i", "uint32": "I", "int64": "q", "uint64": "Q"}
 """``array.array`` type codes of numeric sequence fields (what rclpy accepts without a per-element check)."""
-
-
-def message_class(type_name: str) -> Any:
-    """The rclpy class of ``pkg/msg/Type`` (or ``pkg/Type``, as nested field types are spelled).
-
-    Raises:
-        ImportError: the package is not installed; AttributeError: it has no such type.
-    """
-    parts = type_name.split("/")
-    package, name = parts[0], parts[-1]
-    return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
 def fill_message(msg: Any, fields: dict[str, Any]) -> Any:

@@ -185,6 +185,7 @@ class Ros2Transport(Transport):
         from rclpy.executors import MultiThreadedExecutor
         from std_msgs.msg import Bool
 
+        from .action import THREADS as ACTION_THREADS
         from .action import SimulateStepsAction
         from .nodeservices import NodeServices, guard_node, sim_time_overrides
         from .publications import PublicationEndpoints
@@ -232,7 +233,7 @@ class Ros2Transport(Transport):
                                           self.interfaces, self._submit)
         self._fixed = {f"{config.sim_prefix}/simulate_steps": "simulation_interfaces/action/SimulateSteps"}
         self.endpoints.update(self._fixed)
-        self._executor = MultiThreadedExecutor(num_threads=4, context=self._context)
+        self._executor = MultiThreadedExecutor(num_threads=ACTION_THREADS, context=self._context)
         self._executor.add_node(self._action_node)
         self._executor_thread = threading.Thread(target=self._spin_actions, name="sigcore-ros2-actions",
                                                  daemon=True)

@@ -45,7 +45,7 @@ from .panel import Panel
 from .scenebuild import SceneNodes
 
 if TYPE_CHECKING:
-    from .viewer import Snapshot
+    from .snapshot import Snapshot
 
 log = logging.getLogger("sigcore.viewer")
 

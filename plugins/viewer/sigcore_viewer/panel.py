@@ -12,11 +12,11 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from . import viewer as v
+from .commands import PACES
 
 if TYPE_CHECKING:
     from .playback import Timeline
-    from .viewer import Snapshot
+    from .snapshot import Snapshot
 
 NONE = "(none)"
 HOLD = 0.6
@@ -60,7 +60,7 @@ class Panel:
             self.steps = gui.add_number("Steps", initial_value=100, min=1, max=100000, step=1)
             self.step = gui.add_button("Step", hint="pause, then advance this many steps")
             self.reset = gui.add_button("Reset", hint="put the world back as it was at the start")
-            self.pace = gui.add_dropdown("Pace", tuple(v.PACES), initial_value="real time")
+            self.pace = gui.add_dropdown("Pace", tuple(PACES), initial_value="real time")
         with gui.add_folder("Task"):
             self.result = gui.add_markdown("")
             self.score = gui.add_markdown("")

@@ -21,7 +21,7 @@ except ImportError:  # pragma: no cover - another viser: the public setters
 if TYPE_CHECKING:
     from sigcore.sim.simulation import Simulation
 
-    from .viewer import Snapshot
+    from .snapshot import Snapshot
 
 ROOT = "/sigcore"
 MOVED = 5e-4

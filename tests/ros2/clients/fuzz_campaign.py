@@ -156,6 +156,8 @@ endpoints = sorted(services) + sorted(topics)
 order = rng.sample(endpoints, len(endpoints))
 order += [rng.choice(endpoints) for _ in range(max(0, total - len(order)))]
 unanswered: list[str] = []
+detail: list = []
+recent: list = []
 calls: dict[str, int] = {}
 published: dict[str, int] = {}
 slowest = 0.0
@@ -173,7 +175,9 @@ for name in order:
         calls[name] = calls.get(name, 0) + 1
         if not future.done():
             unanswered.append(name)
+            detail.append([name, round(time.monotonic() - t_start, 2), str(request)[:300], recent[-8:]])
             clients[name].remove_pending_request(future)
+        recent.append([name, round(time.monotonic() - t0, 3), str(request)[:120]])
     else:
         pubs[name].publish(build(load(topics[name], "msg")))
         published[name] = published.get(name, 0) + 1
@@ -229,5 +233,5 @@ res = c.call(load("simulation_interfaces/srv/UnloadWorld", "srv"), "/unload_worl
 calls["/unload_world"] = calls.get("/unload_world", 0) + 1
 after["unload"] = None if res is None else res.result.result
 emit({"requests": sum(calls.values()) + sum(published.values()) + len(wrong), "calls": calls,
-      "published": published, "unanswered": unanswered, "slowest": slowest, "campaign_s": campaign_s,
+      "published": published, "unanswered": unanswered, "detail": detail, "slowest": slowest, "campaign_s": campaign_s,
       "services": sorted(services), "topics": sorted(topics), "after": after})

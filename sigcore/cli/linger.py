@@ -25,8 +25,8 @@ from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, TextIO
 
 if TYPE_CHECKING:
-    from .sim.runner import RunReport
-    from .viewer import Viewer
+    from ..sim.runner import RunReport
+    from ..viewer import Viewer
 
 
 def has_terminal() -> bool:

@@ -12,9 +12,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, ProgressColumn, Task, TextColumn
 from rich.text import Text
 
-from .cli_common import err, out
-from .cli_common import fail as _fail
-from .eval import (
+from ..eval import (
     DOMAINS,
     ENV,
     EpisodeRow,
@@ -29,8 +27,9 @@ from .eval import (
     summarize,
     write_summary,
 )
-from .eval.domains import describe
-from .eval.results import EpisodeLog
+from ..eval.domains import describe
+from ..eval.results import EpisodeLog
+from .common import err, fail, out
 
 KINDS = {"timeout": "timed out", "not_started": "not started", "solution_crashed": "solution crashed",
          "simulator_error": "simulator error"}
@@ -93,17 +92,17 @@ def eval_command(
     (and the success rate is at least --min-success), 1 below --min-success, 2 for refused settings, 130 when
     interrupted."""
     if solution is None and not controller:
-        raise _fail(["sigcore eval needs --solution 'COMMAND' (a ROS 2 solution) or --controller AGENT=CONTROLLER "
-                     "(e.g. robot_000=cleanup.robot)"])
+        raise fail(["sigcore eval needs --solution 'COMMAND' (a ROS 2 solution) or --controller AGENT=CONTROLLER "
+                    "(e.g. robot_000=cleanup.robot)"])
     if fast and factor is not None:
-        raise _fail(["--fast and --factor exclude each other"])
+        raise fail(["--fast and --factor exclude each other"])
     if ray_address is not None and workers != 1:
-        raise _fail(["--workers is for this machine; with --ray the cluster's CPUs decide (--ray-cpus per episode)"])
+        raise fail(["--workers is for this machine; with --ray the cluster's CPUs decide (--ray-cpus per episode)"])
     if wait_for and solution is None:
-        raise _fail(["--wait-for needs --solution (the simulator waits for the solution's topics)"])
+        raise fail(["--wait-for needs --solution (the simulator waits for the solution's topics)"])
     if min_success is not None and not 0.0 <= min_success <= 1.0:
-        raise _fail([f"--min-success {min_success:g}: a success rate is a fraction; valid: 0 to 1 (e.g. 0.8 for "
-                     "80 %)"])
+        raise fail([f"--min-success {min_success:g}: a success rate is a fraction; valid: 0 to 1 (e.g. 0.8 for "
+                    "80 %)"])
     domain_range = _domains(domains)
     pace = ("--fast",) if fast or (solution is None and factor is None) else ("--factor", f"{factor or 1.0:g}")
     _check_world(world_file, seed)
@@ -116,7 +115,7 @@ def eval_command(
     try:
         rows = prepare(out_dir, settings, resume)
     except EvalError as e:
-        raise _fail([str(e)]) from None
+        raise fail([str(e)]) from None
     done = {r.episode for r in rows}
     todo = [settings.spec(i, out_dir, None if ray_address else sys.executable) for i in range(episodes)
             if i not in done]
@@ -156,22 +155,22 @@ def eval_command(
             else:
                 run_local(todo, workers, record)
         except EvalError as e:
-            raise _fail([str(e)]) from None
+            raise fail([str(e)]) from None
         except KeyboardInterrupt:
             interrupted = True
     summary = summarize(progress.rows, episodes)
     path = write_summary(out_dir, {**summary, **extra}, settings.as_dict())
     _table(summary, path, out_dir)
     if interrupted:
-        raise _fail([f"interrupted: {len(progress.rows)} of {count(episodes, 'episode')} recorded in "
-                     f"{out_dir / 'episodes.csv'}; sigcore eval ... --out {out_dir} --resume goes on"], 130)
+        raise fail([f"interrupted: {len(progress.rows)} of {count(episodes, 'episode')} recorded in "
+                    f"{out_dir / 'episodes.csv'}; sigcore eval ... --out {out_dir} --resume goes on"], 130)
     wins, n = sum(r.success for r in progress.rows), len(progress.rows)
     rate = wins / n if n else None
     if min_success is not None:
         if rate is None or rate < min_success:
             shown = "none recorded" if rate is None else f"{100 * rate:.1f} %"
-            raise _fail([f"success rate {shown}, below --min-success {min_success:g} ({100 * min_success:g} %): "
-                         f"exit {EXIT_BELOW}"], EXIT_BELOW)
+            raise fail([f"success rate {shown}, below --min-success {min_success:g} ({100 * min_success:g} %): "
+                        f"exit {EXIT_BELOW}"], EXIT_BELOW)
         err.print(f"success rate {100 * rate:.1f} %, at least --min-success {min_success:g}: exit 0")
 
 
@@ -183,18 +182,18 @@ def _domains(option: str | None) -> range:
     try:
         return parse_domains(text)
     except EvalError as e:
-        raise _fail([f"{source} {e}"]) from None
+        raise fail([f"{source} {e}"]) from None
 
 
 def _check_world(world_file: Path, seed: int) -> None:
     """Exit 2 now if the world cannot be read or drawn (rather than in every episode)."""
-    from .world import WorldError, parse_world
-    from .world.randomize import draw
+    from ..world import WorldError, parse_world
+    from ..world.randomize import draw
 
     try:
         draw(parse_world(world_file), seed)
     except WorldError as e:
-        raise _fail([str(i) for i in e.issues]) from None
+        raise fail([str(i) for i in e.issues]) from None
 
 
 def _relative(path: Path, base: Path | None) -> str:
@@ -203,7 +202,7 @@ def _relative(path: Path, base: Path | None) -> str:
     try:
         return str(path.relative_to(base))
     except ValueError:
-        raise _fail([f"{path} is not in --ray-working-dir {base}: the workers would not have it"]) from None
+        raise fail([f"{path} is not in --ray-working-dir {base}: the workers would not have it"]) from None
 
 
 def _loopback(address: str) -> bool:

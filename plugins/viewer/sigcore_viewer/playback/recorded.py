@@ -1,6 +1,6 @@
-"""Playing a recording back in the web viewer (``sigcore view DIR``): what a recording shows at each moment.
-
-A recording made by ``sigcore run --record`` (:mod:`sigcore.record`) holds everything the viewer needs:
+"""The recorded data a playback shows (``sigcore view DIR``), read once by :func:`load` through the one reader of
+recordings (:mod:`sigcore.record.reader`). A recording made by ``sigcore run --record`` (:mod:`sigcore.record`) holds
+everything the viewer needs:
 
 * the **world** (the world file and its URDFs as attachments): the scene layout is built from it exactly as for a
   live run (a :class:`~sigcore.sim.Simulation` of it is constructed, never stepped, only for ``sim.scene``, the
@@ -15,10 +15,6 @@ A recording made by ``sigcore run --record`` (:mod:`sigcore.record`) holds every
   decoded from the bag and turned into the same lines the live viewer shows (:meth:`Publication.display_text`); a
   reset or another world in the input log (``/sigcore/inputs``) clears the events and the result, as it does live;
 * laser scans and occupancy grids (kept serialized, decoded when shown) for the overlays.
-
-:func:`load` reads all of it once; :class:`Player` is the playback: the clock (play, pause, speed, seek), the
-person's requests and the :class:`~sigcore_viewer.viewer.Snapshot` of a moment. It runs in the process that called
-:meth:`~sigcore_viewer.viewer.WebViewer.play_recording`; the viewer's process shows the snapshots as for a live run.
 """
 
 from __future__ import annotations
@@ -35,22 +31,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from sigcore.errors import SigcoreError, ViewerError
-from sigcore.geometry import quat_yaw
-from sigcore.text import clip, quote
 
-from .exceptions import Interrupted
-from .scenebuild import SceneLayout, layout_of
+from ..exceptions import Interrupted
+from ..scenebuild import SceneLayout, layout_of
 
 if TYPE_CHECKING:
     from sigcore.publish import Publication
     from sigcore.record.reader import RecordingFile
 
-    from .viewer import Snapshot
-
 log = logging.getLogger("sigcore.viewer")
-
-SPEEDS: dict[str, float] = {"0.25x": 0.25, "0.5x": 0.5, "1x": 1.0, "2x": 2.0, "4x": 4.0, "10x": 10.0}
-"""The playback speeds a person may pick (simulated seconds per wall second)."""
 
 LOG_SHOWN = 15
 """Events shown (newest first), as live."""
@@ -59,7 +48,6 @@ _SCAN = "sensor_msgs/msg/LaserScan"
 _GRID = "nav_msgs/msg/OccupancyGrid"
 
 
-# ---------------------------------------------------------------------- what a recording holds
 @dataclass
 class Lines:
     """The lines of the publications a viewer shows as text, with the log time and order they were recorded in.
@@ -354,7 +342,7 @@ def _read(recording: RecordingFile, layout: SceneLayout, kinds: dict[str, str], 
         elif topic in by_topic:
             publication = by_topic[topic]
             try:
-                value = _fields(serializer.deserialize(publication.full_type, data))
+                value = message_fields(serializer.deserialize(publication.full_type, data))
             except Exception as e:  # a message that does not decode: the others are shown
                 if topic not in bad:
                     bad.add(topic)
@@ -411,262 +399,14 @@ def _read(recording: RecordingFile, layout: SceneLayout, kinds: dict[str, str], 
                     start_ns, end_ns, list(info.problems), untracked)
 
 
-def _fields(message: Any) -> Any:
+def message_fields(message: Any) -> Any:
     """A decoded message as the field dictionary a publisher pushes (nested messages as dictionaries, arrays as
     lists)."""
     if dataclasses.is_dataclass(message) and not isinstance(message, type):
-        return {f.name: _fields(getattr(message, f.name)) for f in dataclasses.fields(message)
+        return {f.name: message_fields(getattr(message, f.name)) for f in dataclasses.fields(message)
                 if not f.name.startswith("__")}
     if isinstance(message, np.ndarray):
         return message.tolist()
     if isinstance(message, list | tuple):
-        return [_fields(item) for item in message]
+        return [message_fields(item) for item in message]
     return message
-
-
-# ---------------------------------------------------------------------- the playback
-class Clock:
-    """The playback's time [ns of simulated time] in ``[start, end]``: paused or playing at a speed; it stops at
-    the end. Every method takes the wall clock now (``time.perf_counter()``) [s]."""
-
-    def __init__(self, start_ns: int, end_ns: int) -> None:
-        self.start_ns, self.end_ns = start_ns, end_ns
-        self._t = start_ns
-        self._wall = 0.0
-        self.playing = False
-        self.speed = 1.0
-
-    def now(self, wall: float) -> int:
-        """The time at ``wall``; reaching the end pauses there."""
-        if self.playing:
-            t = self._t + round((wall - self._wall) * self.speed * 1e9)
-            if t >= self.end_ns:
-                self._t, self.playing = self.end_ns, False
-            else:
-                return t
-        return self._t
-
-    def play(self, wall: float) -> None:
-        """Play on from now (from the start when at the end)."""
-        t = self.now(wall)
-        self._t = self.start_ns if t >= self.end_ns else t
-        self._wall = wall
-        self.playing = self.end_ns > self.start_ns
-
-    def pause(self, wall: float) -> None:
-        self._t = self.now(wall)
-        self.playing = False
-
-    def seek(self, t_ns: int, wall: float) -> None:
-        """Go to ``t_ns`` (within the recording), playing on from there if playing."""
-        self._t = min(max(int(t_ns), self.start_ns), self.end_ns)
-        self._wall = wall
-        if self._t >= self.end_ns:
-            self.playing = False
-
-    def set_speed(self, speed: float, wall: float) -> None:
-        self._t = self.now(wall)
-        self._wall = wall
-        self.speed = speed
-
-
-def speed_name(speed: float) -> str:
-    return next((name for name, value in SPEEDS.items() if value == speed), f"{speed:g}x")
-
-
-@dataclass(frozen=True)
-class Timeline:
-    """What the panel needs to show a recording's timeline (sent to the viewer's process once).
-
-    Attributes:
-        start, end: The recording's first and last moment [s].
-        speeds: The speeds to choose from; speed: the one at the start.
-        note: The line at the top of the panel (what is shown, what is off, a cut recording).
-        overlays: Whether each overlay can show something of this recording.
-    """
-
-    start: float
-    end: float
-    speeds: tuple[str, ...]
-    speed: str
-    note: str
-    overlays: dict[str, bool]
-
-
-class Player:
-    """The playback of one recording: its clock, the person's requests, the snapshot of the current moment.
-
-    Args:
-        recorded: The recording (:func:`load`).
-        overlays: The overlay switches (kept in step with the panel's).
-    """
-
-    def __init__(self, recorded: Recorded, overlays: dict[str, bool]) -> None:
-        self.recorded = recorded
-        self.clock = Clock(recorded.start_ns, recorded.end_ns)
-        self.overlays = dict(overlays)
-        self.selected: str | None = None
-        self.notes: list[str] = []
-        self.dirty = True
-        """Something changed that a snapshot must show (a request, a seek)."""
-        self._layout_sent = False
-        self._grids_sent: dict[str, int] = {}
-
-    @property
-    def playing(self) -> bool:
-        return self.clock.playing
-
-    def timeline(self) -> Timeline:
-        r = self.recorded
-        note = (f"**Recording** `{r.path.name}`: world `{r.world}`, {(r.end_ns - r.start_ns) / 1e9:.2f} s recorded "
-                f"on {r.backend}. Step, reset, pace, messages to agents and dragging belong to live runs: they are "
-                "off here.")
-        if r.problems:
-            note += f"  \n**The recording is cut**: it is shown up to t = {r.end_ns / 1e9:.2f} s."
-        if r.untracked:
-            note += (f"  \n{len(r.untracked)} frame(s) of entities added while running are not drawn (their spawn "
-                     "could not be rebuilt from the input log).")
-        return Timeline(r.start_ns / 1e9, r.end_ns / 1e9, tuple(SPEEDS), speed_name(self.clock.speed), note,
-                        {"names": True, "frames": True, "scan": bool(r.scans), "contacts": False,
-                         "map": bool(r.grids)})
-
-    # ------------------------------------------------------------------ the person's requests
-    def request(self, message: tuple[Any, ...], wall: float) -> None:
-        """Act on a request from the panel (``("play",)``, ``("seek", 12.5)``, ``("speed", "2x")``...); one this
-        playback does not take becomes a note."""
-        kind, args = message[0], message[1:]
-        clock = self.clock
-        self.dirty = True
-        try:
-            if kind == "play" and not args:
-                clock.play(wall)
-            elif kind == "pause" and not args:
-                clock.pause(wall)
-            elif kind == "seek" and len(args) == 1:
-                target = args[0]
-                if target == "start":
-                    clock.seek(clock.start_ns, wall)
-                elif target == "end":
-                    clock.seek(clock.end_ns, wall)
-                else:
-                    value = float(target)
-                    if not math.isfinite(value):
-                        raise ValueError(target)
-                    clock.seek(round(value * 1e9), wall)
-            elif kind == "speed" and len(args) == 1:
-                if args[0] not in SPEEDS:
-                    self._note(f"unknown speed {quote(str(args[0]))}; valid: {', '.join(SPEEDS)}", wall)
-                else:
-                    clock.set_speed(SPEEDS[args[0]], wall)
-            elif kind == "select" and len(args) == 1:
-                name = str(args[0])
-                if name not in self.recorded.kinds:
-                    self._note(f"no entity {quote(name)} to select; entities: {', '.join(self.recorded.kinds)}", wall)
-                else:
-                    self.selected = name
-            elif kind == "overlay" and len(args) == 2:
-                key = str(args[0])
-                if key not in self.overlays:
-                    self._note(f"unknown overlay {quote(key)}; valid: {', '.join(self.overlays)}", wall)
-                else:
-                    self.overlays[key] = bool(args[1])
-            elif kind in ("step", "reset", "pace", "send", "move"):
-                self._note(f"{kind} belongs to live runs: a recording only plays back", wall)
-            else:
-                self._note(f"the viewer sent a request the playback does not know: {clip(repr(message), 80)}", wall)
-        except (TypeError, ValueError):
-            self._note(f"the viewer sent a request the playback does not know: {clip(repr(message), 80)}", wall)
-
-    def _note(self, text: str, wall: float) -> None:
-        self.notes.append(f"t = {self.clock.now(wall) / 1e9:.2f} s: {text}")
-        del self.notes[:-5]
-
-    # ------------------------------------------------------------------ what is shown
-    def snapshot(self, wall: float) -> Snapshot:
-        """The snapshot of the moment ``wall`` stands for (the first one carries the layout). A snapshot while
-        paused is exact (every frame sent as recorded); while playing, frames that moved less than the viewer's
-        threshold are not sent again, as live."""
-        from .viewer import Snapshot, _grid_image, scan_points
-
-        r = self.recorded
-        t_ns = self.clock.now(wall)
-        poses, hidden = r.poses_at(t_ns)
-        layout = None
-        if not self._layout_sent:
-            layout, self._layout_sent = r.layout, True
-        texts = r.lines.at(t_ns)
-        texts["selection"] = self._describe(poses, hidden, t_ns)
-        texts["notes"] = "  \n".join(reversed(self.notes))
-        clock = self.clock
-        t = t_ns / 1e9
-        state = (f"playing ({speed_name(clock.speed)})" if clock.playing else
-                 "paused at the end" if t_ns >= clock.end_ns else "paused")
-        status = (f"**{state}** · recording `{r.path.name}` · world `{r.world}` · t = {t:.2f} s of "
-                  f"{clock.start_ns / 1e9:.2f}–{clock.end_ns / 1e9:.2f} s · step {t_ns // r.dt_ns}")
-        snap = Snapshot(t_ns // r.dt_ns, t, wall, layout, poses, status, texts, [], list(r.kinds))
-        snap.exact = not clock.playing
-        snap.hidden = hidden
-        snap.timeline = (t, clock.playing, speed_name(clock.speed))
-        if self.overlays["scan"] and r.scans:
-            scans = []
-            for kept in r.scans.values():
-                k = kept.index_at(t_ns)
-                if k >= 0:
-                    scans.append(_fields(_decode(kept.typename, kept.data[k])))
-            snap.scan = scan_points(r.layout, scans, poses)
-        for topic, kept in r.grids.items():
-            k = kept.index_at(t_ns)
-            if self._grids_sent.get(topic) != k:
-                self._grids_sent[topic] = k
-                grid = _grid_image(_fields(_decode(kept.typename, kept.data[k]))) if k >= 0 else None
-                snap.grid = grid if grid is not None else _no_grid()
-        self.dirty = False
-        return snap
-
-    def _describe(self, poses: np.ndarray, hidden: np.ndarray, t_ns: int) -> str:
-        """The selected entity's pose in the ground truth at ``t_ns``."""
-        name = self.selected
-        if name is None:
-            return "click an entity, or pick one above"
-        layout = self.recorded.layout
-        try:
-            i = layout.parts.index((name, None))
-        except ValueError:
-            return f"{quote(name)} has no frame in the scene"
-        lines = [f"**{name}** ({self.recorded.kinds.get(name, '?')})"]
-        if hidden[i]:
-            lines.append(f"not in the world at t = {t_ns / 1e9:.2f} s")
-            return "  \n".join(lines)
-        pos, quat = poses[i, :3], poses[i, 3:]
-        w, x, y, z = quat
-        lines.append(f"position: {pos[0]:.3f} {pos[1]:.3f} {pos[2]:.3f} m")
-        yaw = math.degrees(quat_yaw(quat))
-        lines.append(f"orientation (w x y z): {w:.3f} {x:.3f} {y:.3f} {z:.3f} (yaw {yaw:.1f}°)")
-        source = "the ground truth" if self.recorded.tracked[i] else "the world file (no ground truth of it)"
-        lines.append(f"from {source} at t = {t_ns / 1e9:.2f} s")
-        return "  \n".join(lines)
-
-
-_SERIALIZER: Any = None
-
-
-def _decode(typename: str, data: bytes) -> Any:
-    global _SERIALIZER
-    if _SERIALIZER is None:
-        from sigcore.record.serialize import Serializer
-
-        _SERIALIZER = Serializer()
-    return _SERIALIZER.deserialize(typename, data)
-
-
-def _no_grid() -> tuple[np.ndarray, float, float, np.ndarray, np.ndarray]:
-    """No map at this moment: an empty image (the map shown is removed)."""
-    return np.zeros((0, 0, 3), dtype=np.uint8), 0.0, 0.0, np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
-
-
-def loading(path: Path, wall: float) -> Snapshot:
-    """The snapshot shown while the recording is read (an empty scene)."""
-    from .viewer import Snapshot
-
-    return Snapshot(0, 0.0, wall, layout_of(None), np.empty((0, 7)), f"**reading the recording** `{path}`…",
-                    {"score": "", "events": "", "result": "", "selection": "", "notes": ""}, [], [])

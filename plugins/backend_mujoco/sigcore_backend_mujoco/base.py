@@ -1,0 +1,64 @@
+"""What every part of :class:`~.backend.MujocoBackend` shares: its model and data, its bookkeeping attributes, and
+the helpers that several parts call (entity lookup, fresh kinematics on read, held entities). The parts are mixins
+of :class:`MujocoBase`: :mod:`.state`, :mod:`.modes`, :mod:`.joints`, and :mod:`.backend` itself (life cycle,
+stepping, run-time changes, grasps, contacts and rays).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from sigcore.backend import Backend, find_entity
+
+from .collision import CollisionBits
+from .layout import EntityIndex
+
+_NO_INTS = np.zeros(0, dtype=np.int64)
+
+
+class MujocoBase(Backend):
+    """The bookkeeping of the MuJoCo backend and the helpers its parts share (see the module docstring)."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    _entities: dict[str, EntityIndex]
+    _pose_rows: dict[tuple[tuple[str, str | None], ...], np.ndarray]
+    """:meth:`get_poses`' body indices per list of parts asked for (a viewer's, a recorder's), for this model."""
+    _scratch: mujoco.MjData | None
+    _bits: CollisionBits
+    _tick: int
+    _synced: int
+    _applied: bool
+    _post: bool
+    _held: set[str]
+    _hold: np.ndarray
+    _held_qpos: np.ndarray
+    _held_dofs: np.ndarray
+    _held_values: np.ndarray
+
+    def _entity(self, name: str) -> EntityIndex:
+        self.require_world()
+        return find_entity(self._entities, name)
+
+    def _sync(self) -> None:
+        """Bring poses, centres of mass and velocities in ``data`` up to date with ``qpos``/``qvel``."""
+        if self._synced != self._tick:
+            m, d = self.model, self.data
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            mujoco.mj_comVel(m, d)
+            self._synced = self._tick
+
+    def _rebuild_held(self) -> None:
+        held = [self._entities[n] for n in sorted(self._held)]
+        self._held_qpos = np.concatenate([e.qpos for e in held]) if held else _NO_INTS
+        self._held_dofs = np.concatenate([e.dofs for e in held]) if held else _NO_INTS
+        self._held_values = self._hold[self._held_qpos]
+        self._post = bool(self._held_qpos.size) or self._applied
+
+    def _update_hold(self, e: EntityIndex) -> None:
+        if e.name in self._held:
+            self._hold[e.qpos] = self.data.qpos[e.qpos]
+            self.data.qvel[e.dofs] = 0.0
+            self._held_values = self._hold[self._held_qpos]
