@@ -52,14 +52,23 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+def _block_sigint() -> None:
+    """In the child before exec: SIGINT blocked, as a parent whose starting thread blocked it leaves it."""
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+
+
+STARTS = {"default": None, "ignored": _ignore_sigint, "blocked": _block_sigint}
+"""How SIGINT is left to a child process by the one starting it."""
+
+
 class Proc:
     """A process in its own session whose merged output is read by a thread, line by line."""
 
-    def __init__(self, args: list[str], env: dict[str, str], ignore_sigint: bool = False) -> None:
+    def __init__(self, args: list[str], env: dict[str, str], sigint: str = "default") -> None:
         self.lines: list[str] = []
         self._new_line = threading.Condition()
         self.proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                     start_new_session=True, preexec_fn=_ignore_sigint if ignore_sigint else None)
+                                     start_new_session=True, preexec_fn=STARTS[sigint])
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -103,9 +112,10 @@ class Proc:
         return "\n".join(self.lines)
 
 
-def sigcore_run(*args: str, env: dict[str, str] | None = None, ignore_sigint: bool = False) -> Proc:
-    """``python -m sigcore run ARGS`` (the ROS 2 transport on unless ARGS say otherwise)."""
-    return Proc([sys.executable, "-m", "sigcore", "run", *args], env or ros_env(), ignore_sigint)
+def sigcore_run(*args: str, env: dict[str, str] | None = None, sigint: str = "default") -> Proc:
+    """``python -m sigcore run ARGS`` (the ROS 2 transport on unless ARGS say otherwise), SIGINT left to it as
+    :data:`STARTS` names."""
+    return Proc([sys.executable, "-m", "sigcore", "run", *args], env or ros_env(), sigint)
 
 
 def assert_results(out: str, signal_name: str) -> None:
@@ -143,12 +153,14 @@ def test_sigint_ends_a_ros2_run_with_summary_and_score_table() -> None:
 
 
 @needs_ros
-@pytest.mark.parametrize(("sig", "ignore_sigint"), [(signal.SIGTERM, False), (signal.SIGINT, True)],
-                         ids=["sigterm", "sigint-started-ignored"])
-def test_signal_ends_a_ros2_run_with_summary_and_score_table(sig: signal.Signals, ignore_sigint: bool) -> None:
-    """SIGTERM to `sigcore run` (ROS 2 on), and SIGINT to one started with SIGINT ignored (a shell's background job),
-    print the summary and the score table and exit 0, like QUITTING."""
-    sim = sigcore_run(str(CLEANUP), ignore_sigint=ignore_sigint)
+@pytest.mark.parametrize(("sig", "sigint"), [(signal.SIGTERM, "default"), (signal.SIGINT, "ignored"),
+                                             (signal.SIGINT, "blocked")],
+                         ids=["sigterm", "sigint-started-ignored", "sigint-started-blocked"])
+def test_signal_ends_a_ros2_run_with_summary_and_score_table(sig: signal.Signals, sigint: str) -> None:
+    """SIGTERM to `sigcore run` (ROS 2 on), and SIGINT to one started with SIGINT ignored (a shell's background job)
+    or blocked (inherited from a thread that blocked it), print the summary and the score table and exit 0, like
+    QUITTING."""
+    sim = sigcore_run(str(CLEANUP), sigint=sigint)
     try:
         assert sim.wait_line("ready: transport 'ros2' is up", STARTUP), sim.output
         sim.proc.send_signal(sig)

@@ -71,6 +71,7 @@ def main() -> int:
                     help="after the run, keep the page up at most S seconds (default: until Enter or the page is "
                          "closed when run from a terminal, not at all otherwise)")
     args = ap.parse_args()
+    _take_ctrl_c()
     viewer_args = _viewer_args(args)
     factor = args.factor if args.factor is not None else 1.0 if args.viewer else 2.5
     lockstep = args.lockstep if args.lockstep is not None else args.viewer
@@ -110,6 +111,15 @@ def main() -> int:
             results.parent.rmdir()
     print(f"run_task: simulator exited {code}; wall time {time.perf_counter() - t0:.1f} s")
     return code
+
+
+def _take_ctrl_c() -> None:
+    """Ctrl-C (SIGINT) interrupts this process however it was started: a process started in the background by a
+    shell, or by a parent that blocked the signal, inherits SIGINT ignored or blocked, and Python then never raises
+    KeyboardInterrupt (the Ctrl-C would be lost, and the simulator left running). The simulator and the nodes
+    inherit the unblocked mask; they install handlers of their own."""
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _viewer_args(args: argparse.Namespace) -> list[str]:

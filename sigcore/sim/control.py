@@ -217,7 +217,8 @@ def stop_on_signals(control: RunControl) -> Iterator[None]:
     The run then ends as after a QUITTING request: the loop finishes its step, the transport is stopped, the results
     are returned. A second signal while stopping raises :class:`KeyboardInterrupt` (abort without waiting). The
     handlers are installed even where a signal is ignored (a background job started by a shell inherits SIGINT
-    ignored), and the previous handlers are restored when the block ends. Outside the main thread, where Python
+    ignored) or blocked (inherited from a parent's thread that blocked it), and the previous handlers (and mask) are
+    restored when the block ends. Outside the main thread, where Python
     cannot install handlers, this does nothing.
     """
     if threading.current_thread() is not threading.main_thread():
@@ -233,9 +234,12 @@ def stop_on_signals(control: RunControl) -> Iterator[None]:
         control.stop(name)
 
     previous = {signum: signal.signal(signum, handler) for signum in STOP_SIGNALS}
+    blocked = signal.pthread_sigmask(signal.SIG_UNBLOCK, STOP_SIGNALS) & set(STOP_SIGNALS)  # inherited blocked
     try:
         yield
     finally:
         for signum, old in previous.items():
             # None: a handler installed outside Python, which cannot be put back; the default is the closest
             signal.signal(signum, old if old is not None else signal.SIG_DFL)
+        if blocked:
+            signal.pthread_sigmask(signal.SIG_BLOCK, blocked)

@@ -100,3 +100,22 @@ def run(backend: Backend, seconds: float, dt: float = 0.002) -> None:
     """Step ``backend`` for ``seconds`` of simulated time."""
     for _ in range(round(seconds / dt)):
         backend.step()
+
+
+def turn_shoulder(backend: Backend) -> list[float]:
+    """Turn the bot's shoulder at 0.5 rad/s (``set_joint_velocity``), let it settle for 0.5 s, and return its velocity
+    after each of the next 250 steps (0.5 s)."""
+    backend.set_joint_velocity("bot", "shoulder", 0.5)
+    run(backend, 0.5)
+    speeds = []
+    for _ in range(250):
+        backend.step()
+        speeds.append(backend.get_joint_velocity("bot", "shoulder"))
+    return speeds
+
+
+def stop_shoulder(backend: Backend) -> float:
+    """Set the bot's shoulder velocity to 0, let it settle for 0.5 s, and return its angle then."""
+    backend.set_joint_velocity("bot", "shoulder", 0.0)
+    run(backend, 0.5)
+    return backend.get_joint_angle("bot", "shoulder")

@@ -1,6 +1,8 @@
-"""Fixtures of the backend conformance suite: every test runs once per backend registered through the plugin
-registry (``sigcore.plugins.backends()``), so a third-party backend installed next to sigcore is tested by the
-same suite. Worlds are tiny inline XML written to ``tmp_path``."""
+"""Fixtures of the backend conformance suite: every test of ``test_conformance_*.py`` runs once per backend registered
+through the plugin registry (``sigcore.plugins.backends()``), so a third-party backend installed next to sigcore is
+tested by the same suite. The tests of ``test_mujoco_*.py`` check what only the MuJoCo backend promises (its model
+and data, tighter tolerances) and run on MuJoCo alone (``build_mujoco``). Worlds are tiny inline XML written to
+``tmp_path``."""
 
 from __future__ import annotations
 
@@ -39,16 +41,28 @@ def make_world(tmp_path: Path) -> WorldFactory:
     return make
 
 
-@pytest.fixture
-def build(backend_name: str) -> Iterator[Callable[[World], Backend]]:
-    """``build(world)``: a new instance of the backend under test holding ``world``."""
+def _builder(backend_name: str) -> Callable[[World], Backend]:
+    """``make(world)``: a new instance of the backend ``backend_name`` holding ``world``."""
 
     def make(world: World) -> Backend:
         backend = plugins.get_backend(backend_name)()
         backend.build(world)
         return backend
 
-    yield make
+    return make
+
+
+@pytest.fixture
+def build(backend_name: str) -> Iterator[Callable[[World], Backend]]:
+    """``build(world)``: a new instance of the backend under test holding ``world``."""
+    yield _builder(backend_name)
+
+
+@pytest.fixture
+def build_mujoco() -> Callable[[World], Backend]:
+    """``build_mujoco(world)``: a new MuJoCo backend holding ``world``, for the MuJoCo-only tests
+    (``test_mujoco_*.py``): never parametrised over the other backends."""
+    return _builder("mujoco")
 
 
 @pytest.fixture

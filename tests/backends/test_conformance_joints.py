@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from conformance_worlds import robot, run
+from conformance_worlds import robot, run, stop_shoulder, turn_shoulder
 
 from sigcore.errors import BackendError
 from sigcore.geometry import quat_yaw
@@ -39,16 +39,9 @@ def test_joint_velocity_tracked(make_world, build) -> None:
     """set_joint_velocity turns an arm joint at that velocity under gravity (mean within 2 %), and velocity 0
     then holds it (drift < 1e-3 rad in 0.5 s)."""
     b = build(make_world(robot(extra=FIXED)))
-    b.set_joint_velocity("bot", "shoulder", 0.5)
-    run(b, 0.5)
-    speeds = []
-    for _ in range(250):
-        b.step()
-        speeds.append(b.get_joint_velocity("bot", "shoulder"))
+    speeds = turn_shoulder(b)
     assert np.mean(speeds) == pytest.approx(0.5, rel=0.02)
-    b.set_joint_velocity("bot", "shoulder", 0.0)
-    run(b, 0.5)
-    held = b.get_joint_angle("bot", "shoulder")
+    held = stop_shoulder(b)
     run(b, 0.5)
     assert b.get_joint_angle("bot", "shoulder") == pytest.approx(held, abs=1e-3)
 

@@ -16,6 +16,7 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -48,11 +49,11 @@ def free_port() -> int:
 class Command:
     """A command in a process group of its own, its output in ``log``, without a terminal."""
 
-    def __init__(self, args: list[str], log: Path) -> None:
+    def __init__(self, args: list[str], log: Path, preexec: Callable[[], None] | None = None) -> None:
         self.log = log
         self._out = log.open("w")
         self.proc = subprocess.Popen(args, cwd=ROOT, stdin=subprocess.DEVNULL, stdout=self._out,
-                                     stderr=subprocess.STDOUT, start_new_session=True,
+                                     stderr=subprocess.STDOUT, start_new_session=True, preexec_fn=preexec,
                                      env={**os.environ, "PYTHONUNBUFFERED": "1"})
 
     def output(self) -> str:
@@ -169,14 +170,23 @@ def test_after_the_run_the_page_keeps_the_last_moment_until_it_is_closed(tmp_pat
         command.stop()
 
 
-def test_ctrl_c_in_the_terminal_ends_the_task_and_its_processes(tmp_path: Path) -> None:
+def _block_sigint() -> None:
+    """In the child before exec: SIGINT blocked and ignored, as a parent may leave it (a thread that blocked it, a
+    shell's background job)."""
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@pytest.mark.parametrize("started", ["default", "sigint-blocked"])
+def test_ctrl_c_in_the_terminal_ends_the_task_and_its_processes(tmp_path: Path, started: str) -> None:
     """Ctrl-C on ``run_task.py --viewer`` (the signal reaches run_task's process group only: the simulator and the
     two nodes run in sessions of their own) is passed on: the simulator ends its run and prints its results, run_task
-    exits with the simulator's code and no traceback, and nothing is left behind (the viewer's port is free again)."""
+    exits with the simulator's code and no traceback, and nothing is left behind (the viewer's port is free again).
+    The same when run_task was started with SIGINT blocked and ignored (it takes Ctrl-C back)."""
     port = free_port()
     task = Command([sys.executable, str(RUN_TASK), "--domain", str(next_domain()), "--viewer", "--viewer-port",
                     str(port), "--viewer-linger", "900"],
-                   tmp_path / "run_task.log")
+                   tmp_path / "run_task.log", _block_sigint if started == "sigint-blocked" else None)
     try:
         task.url(120)
         end = time.monotonic() + 120
@@ -197,6 +207,19 @@ def test_ctrl_c_in_the_terminal_ends_the_task_and_its_processes(tmp_path: Path) 
             time.sleep(0.5)
     finally:
         task.stop()
+        _kill_strays(f"--viewer-port {port}")
+
+
+def _kill_strays(marker: str) -> None:
+    """Kill the process group of every process whose command line holds ``marker`` (a simulator that run_task
+    started in a session of its own and did not stop, when the test failed): none lingers on after the test."""
+    for proc in Path("/proc").iterdir():
+        try:
+            cmdline = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            if proc.name.isdigit() and marker in cmdline:
+                os.killpg(os.getpgid(int(proc.name)), signal.SIGKILL)
+        except (OSError, ProcessLookupError):
+            continue
 
 
 def _port_free(port: int) -> bool:

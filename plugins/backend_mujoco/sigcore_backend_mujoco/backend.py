@@ -1,6 +1,6 @@
 """The MuJoCo implementation of :class:`sigcore.backend.Backend`.
 
-Runtime techniques (each verified against MuJoCo 4.0 in ``tests/backend_mujoco``):
+Runtime techniques (each verified against MuJoCo 4.0 in ``tests/backends/test_mujoco_runtime_entities.py``):
 
 * **Step cost.** :meth:`MujocoBackend.step` is ``mj_step`` plus a counter increment; only when an entity is
   held or a wrench/torque was applied does it run a vectorised post-step (restore held ``qpos``, zero their

@@ -11,7 +11,7 @@ body's joints and geoms by their order in the body. Each surviving element gets 
   poses, servo and motor torque limits).
 
 **Bit for bit.** A MuJoCo step of the new model then gives the surviving bodies exactly the values the old model
-would have given them, because (checked on MuJoCo 4.0, ``tests/backend_mujoco/test_runtime_entities.py``):
+would have given them, because (checked on MuJoCo 4.0, ``tests/backends/test_mujoco_runtime_entities.py``):
 
 * the builder appends a new entity's elements after the existing ones, so their ids, their dof order and the
   order of their contacts (MuJoCo sorts the broad phase's pairs by body ids) are unchanged; removing keeps the

@@ -1,34 +1,26 @@
-"""Poses, velocities, free fall, wrenches, masses and centres of mass."""
+"""MuJoCo only: poses read from ``qpos`` after a step, and an engine instability reported once."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-STICK_URDF = """<robot name="stick">
-  <link name="stick_link">
-    <inertial><origin xyz="0.3 0 0"/><mass value="2"/>
-      <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.02"/></inertial>
-    <collision><origin xyz="0.3 0 0"/><geometry><box size="0.6 0.05 0.05"/></geometry></collision>
-  </link>
-</robot>"""
 
-
-def test_pose_after_step_matches_qpos(make_world, build) -> None:
+def test_pose_after_step_matches_qpos(make_world, build_mujoco) -> None:
     """After a step, get_pose describes the integrated state (not the state before the step)."""
-    b = build(make_world('<object name="o" shape="sphere" size="0.1" pose="0 0 5"/>'))
+    b = build_mujoco(make_world('<object name="o" shape="sphere" size="0.1" pose="0 0 5"/>'))
     b.set_velocity("o", linear=np.array([3.0, 0.0, 0.0]))
     b.step()
     np.testing.assert_allclose(b.get_pose("o")[0], b.data.qpos[0:3], atol=1e-15)
     assert b.get_pose("o")[0][0] == pytest.approx(3.0 * 0.002)
 
 
-def test_an_engine_instability_is_reported_once(make_world, build, caplog: pytest.LogCaptureFixture) -> None:
+def test_an_engine_instability_is_reported_once(make_world, build_mujoco, caplog: pytest.LogCaptureFixture) -> None:
     """A torque that makes MuJoCo's accelerations blow up (it then resets its state) is logged once as a warning
     naming the entity, and counted each time it happens; a calm world logs nothing."""
     import logging
 
-    b = build(make_world('<object name="pebble" shape="sphere" size="0.01" mass="0.001" pose="0 0 0.5"/>'))
+    b = build_mujoco(make_world('<object name="pebble" shape="sphere" size="0.01" mass="0.001" pose="0 0 0.5"/>'))
     with caplog.at_level(logging.WARNING, logger="sigcore.backend"):
         for _ in range(128):  # calm: nothing
             b.step()

@@ -1,8 +1,9 @@
-"""MuJoCo: adding and removing entities while running keeps every other body's state and trajectory bit for bit.
+"""MuJoCo only: adding and removing entities while running keeps every other body's state and trajectory bit for
+bit.
 
-The backend-independent behaviour (falling, resting, grasping, reset, refusals) is in
-``tests/backends/test_conformance_spawn.py``; here is what only the MuJoCo backend promises (``carry.py``): the state
-carried over exactly, the same trajectory as a run without the spawn step by step, no element left behind.
+The backend-independent behaviour (falling, resting, grasping, reset, refusals) is in ``test_conformance_spawn.py``;
+here is what only the MuJoCo backend promises (``carry.py``): the state carried over exactly, the same trajectory as
+a run without the spawn step by step, no element left behind.
 """
 
 from __future__ import annotations
