@@ -140,5 +140,16 @@ def test_the_world_layer_imports_nothing_above_it() -> None:
     assert wrong == []
 
 
+def test_the_world_layer_stands_on_the_foundations_only() -> None:
+    """``sigcore/world/`` is the bottom layer: outside itself it imports only the foundations every layer shares
+    (errors, geometry, client text), not the scene description, the backend interface or the publications above it
+    (an entity's looks are in ``world/appearance.py``, which the scene description reads)."""
+    foundations = {"sigcore.errors", "sigcore.geometry", "sigcore.text"}
+    wrong = sorted(f"{module} imports {target}" for module, targets in import_graph().items()
+                   if module.startswith("sigcore.world") for target in targets
+                   if not target.startswith("sigcore.world") and target not in foundations)
+    assert wrong == []
+
+
 def test_no_import_cycle_inside_sigcore() -> None:
     assert cycles(import_graph()) == []

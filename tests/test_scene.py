@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from lxml import etree
 
-from sigcore.scene import HUMAN_COLOR, human_dimensions
 from sigcore.sim import Simulation
 from sigcore.sim.description import CUBE, CYLINDER, DELETEALL, MESH_RESOURCE, SPHERE, robot_description
 from sigcore.world import World, parse_world
+from sigcore.world.appearance import HUMAN_COLOR, human_dimensions
 from sigcore.world.visuals import mesh_vertex_bounds
 
 ROOT = Path(__file__).parent.parent

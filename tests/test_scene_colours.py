@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sigcore.scene import link_colors
 from sigcore.sim import Simulation
 from sigcore.world import parse_world
+from sigcore.world.appearance import link_colors
 
 ROOT = Path(__file__).parent.parent
 TRASHBOX = ROOT / "worlds" / "models" / "trashbox" / "trashbox.urdf"

@@ -27,9 +27,10 @@ from lxml import etree
 
 from ..geometry import quat_rotate
 from ..publish import Publication, Publisher
-from ..scene import Scene, Visual
+from ..scene import Scene
 from ..world.models import Robot, World
 from ..world.urdf import resolve_mesh
+from ..world.visuals import Visual
 
 if TYPE_CHECKING:
     from .simulation import Simulation

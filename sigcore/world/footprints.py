@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import entity_scene, links_in_root, visual_corners
+from .appearance import entity_scene, links_in_root, visual_corners
 from .models import Entity, Robot, World
 
 log = logging.getLogger("sigcore.randomize")

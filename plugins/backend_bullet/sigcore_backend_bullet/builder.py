@@ -20,7 +20,7 @@ import pybullet as pb
 
 from sigcore.backend import MAIN
 from sigcore.errors import BackendError
-from sigcore.scene import human_dimensions
+from sigcore.world.appearance import human_dimensions
 from sigcore.world.exceptions import UrdfError
 from sigcore.world.meshes import mesh_problem
 from sigcore.world.models import Entity, Human, Object, Robot, World

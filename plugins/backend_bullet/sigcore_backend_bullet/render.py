@@ -7,8 +7,8 @@ principal point); depth is the depth buffer converted to distances along the opt
 
 Bodies built without a visual shape (sigcore's objects and humans) are drawn from their collision shapes, and the
 URDFs' visuals are dropped (:mod:`.urdf_prep`); each link is given its colour in the scene description once, before
-the first image (:func:`sigcore.scene.link_colors`; a shape its world-file colour), so the camera shows what the
-viewer shows.
+the first image (:func:`sigcore.world.appearance.link_colors`; a shape its world-file colour), so the camera shows
+what the viewer shows.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 import pybullet as pb
 
 from sigcore.backend import CameraView, Image, Renderer
-from sigcore.scene import link_colors
+from sigcore.world.appearance import link_colors
 from sigcore.world.models import Object, Robot
 from sigcore.world.visuals import DEFAULT_COLOR
 

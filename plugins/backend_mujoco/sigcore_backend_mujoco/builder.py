@@ -33,7 +33,7 @@ import numpy as np
 
 from sigcore.errors import BackendError
 from sigcore.geometry import quat_from_rpy
-from sigcore.scene import HUMAN_COLOR, Color, human_dimensions, link_colors
+from sigcore.world.appearance import HUMAN_COLOR, Color, human_dimensions, link_colors
 from sigcore.world.exceptions import UrdfError
 from sigcore.world.models import Human, Object, Pose, Robot, World
 from sigcore.world.urdf import UrdfDocument
@@ -157,8 +157,8 @@ def _frame(pose: Pose) -> tuple[list[float], list[float]]:
 def _style(body: mujoco.MjsBody, friction: dict[str, float], default: float | None,
            colors: dict[str, Color]) -> None:
     """Give every geom below ``body`` the backend's collision bits, group and friction (per body name), and the
-    colour of its link in the scene description (:func:`sigcore.scene.link_colors`: what the camera shows is what
-    the viewer shows)."""
+    colour of its link in the scene description (:func:`sigcore.world.appearance.link_colors`: what the camera shows
+    is what the viewer shows)."""
     for geom in body.find_all(mujoco.mjtObj.mjOBJ_GEOM):
         if geom.contype == 0 and geom.conaffinity == 0:
             geom.group = GROUP_VISUAL
