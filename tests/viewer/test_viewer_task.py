@@ -183,8 +183,8 @@ def test_ctrl_c_in_the_terminal_ends_the_task_and_its_processes(tmp_path: Path, 
     two nodes run in sessions of their own) is passed on: the simulator ends its run and prints its results, run_task
     exits with the simulator's code and no traceback, and nothing is left behind (the viewer's port is free again).
     The same when run_task was started with SIGINT blocked and ignored (it takes Ctrl-C back)."""
-    port = free_port()
-    task = Command([sys.executable, str(RUN_TASK), "--domain", str(next_domain()), "--viewer", "--viewer-port",
+    port, domain = free_port(), next_domain()
+    task = Command([sys.executable, str(RUN_TASK), "--domain", str(domain), "--viewer", "--viewer-port",
                     str(port), "--viewer-linger", "900"],
                    tmp_path / "run_task.log", _block_sigint if started == "sigint-blocked" else None)
     try:
@@ -207,16 +207,20 @@ def test_ctrl_c_in_the_terminal_ends_the_task_and_its_processes(tmp_path: Path, 
             time.sleep(0.5)
     finally:
         task.stop()
-        _kill_strays(f"--viewer-port {port}")
+        _kill_strays(domain)
 
 
-def _kill_strays(marker: str) -> None:
-    """Kill the process group of every process whose command line holds ``marker`` (a simulator that run_task
-    started in a session of its own and did not stop, when the test failed): none lingers on after the test."""
+def _kill_strays(domain: int) -> None:
+    """Kill the process group of every process that runs in ROS 2 domain ``domain`` (the simulator and the nodes
+    that run_task started in sessions of their own and did not stop, when the test failed): none lingers on after
+    the test. The domain is this test's alone (``next_domain``)."""
+    mine = os.getpgid(0)
+    wanted = f"ROS_DOMAIN_ID={domain}".encode()
     for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
         try:
-            cmdline = (proc / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-            if proc.name.isdigit() and marker in cmdline:
+            if wanted in (proc / "environ").read_bytes().split(b"\0") and os.getpgid(int(proc.name)) != mine:
                 os.killpg(os.getpgid(int(proc.name)), signal.SIGKILL)
         except (OSError, ProcessLookupError):
             continue
