@@ -92,6 +92,10 @@ FIGURES: dict[str, list[str]] = {
         "raw mj_step", "raw mj_step + mj_multiRay lidar", "sigcore step (all on)", "sigcore step, no lidar")]
     + [rf"^{lit(label)} +{N}" for label in ("ratio sigcore / (raw + same lidar):", "ratio sigcore without lidar / raw:",
                                             "ratio sigcore (all on) / bare mj_step:")],
+    "step_breakdown": [r"^variant +us/step +added +alone$", rf"^mj_step +{N}$"]
+    + [rf"^{lit(label)} +{N} +[+-]{N} +{N}$" for label in ("backend", "+ contacts", "+ step channel", "+ lidar")]
+    + [rf"^Simulation\.step +{N}$",
+       rf"^Simulation\.step - mj_step: {N} us a step \(of which the parts alone: {N} us\)"],
     "sim_throughput_bullet": [rf"^  {lit(label)} +{N} steps/s +{N} us/step +real-time factor +{N}" for label in (
         "raw stepSimulation", "raw stepSimulation + rayTestBatch lidar", "sigcore step (all on)",
         "sigcore step, no lidar", "sigcore step, no lidar, no features")]
