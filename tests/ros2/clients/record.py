@@ -20,6 +20,10 @@ tf = c.listen(TFMessage, "/tf", deep)
 c.wait_for(lambda: c.node.count_publishers("/bot/joint_states") > 0 and c.node.count_publishers("/tf") > 0, 30.0)
 c.spin(1.0)
 c.publish(Twist, "/bot/cmd_vel", **{"linear.x": 0.4, "angular.z": 0.6})
+# a topic and a service are not ordered: the first step request must not overtake the first command (it did in a
+# ci-fresh run with four test workers, and the command took effect at step 1); 1 s is ten times the wait between the
+# later commands and the steps after them
+c.spin(1.0)
 results, resets, changes = [], [], {}
 for i in range(10):
     results.append(c.call(StepSimulation, "/step_simulation", timeout=60.0, steps=50).result.result)
