@@ -34,6 +34,11 @@ CAN_RADIUS = 0.033
 TOLERANCE = 0.05
 """How far [m] the reported position may be from the can's axis at its centre's height: the camera sees the near
 side of the can (its radius, 3.3 cm, nearer) and the red pixels' centre may be a pixel or two off."""
+LATERAL = 0.1
+"""How far [m] the reported position may be off sideways (x in the optical frame): the robot's pose is read after the
+example stopped it, and the image it measured was taken while it still turned; under load (four test workers on 2
+cores) the robot turned on by about 1 degree in between (5.1 cm at 2.8 m in one ci-fresh run). The depth and the
+height (y, z) are not affected: :data:`TOLERANCE`."""
 
 
 @pytest.fixture(scope="module")
@@ -60,4 +65,6 @@ def test_the_example_finds_the_red_can_where_it_is(sim: SimProcess) -> None:
     seen = np.array([found["x"], found["y"], found["z"]])
     assert abs(truth[0]) < 0.1  # the robot stopped with the can near the middle columns (3 px: 3 cm at 2.8 m, and
     # the visible blob's centre may sit a few pixels off the can's axis)
-    assert np.linalg.norm(seen - (truth - [0.0, 0.0, CAN_RADIUS])) < TOLERANCE, (seen, truth)
+    error = seen - (truth - [0.0, 0.0, CAN_RADIUS])
+    assert abs(error[0]) < LATERAL, (seen, truth)
+    assert np.linalg.norm(error[1:]) < TOLERANCE, (seen, truth)
