@@ -150,6 +150,10 @@ clients = {n: c.node.create_client(load(t, "srv"), n) for n, t in services.items
 qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 pubs = {n: c.node.create_publisher(load(t, "msg"), n, qos) for n, t in topics.items()}
 c.wait_for(lambda: all(p.get_subscription_count() > 0 for p in pubs.values()), 20.0)
+# a request sent before the client is matched with its server is lost (in a ci-fresh run with four workers, the
+# campaign's first call, made right after its client was created, was never answered): every client waits for its
+# server (bounded: a client still unmatched then is what the campaign reports)
+c.wait_for(lambda: all(cl.service_is_ready() for cl in clients.values()), 30.0)
 c.spin(0.5)
 
 endpoints = sorted(services) + sorted(topics)
