@@ -316,37 +316,45 @@ class Simulation:
             raise ApiError("no world is loaded: nothing to step; load one first (load_world)")
         if not self._started:
             self.start()
-        backend = self._backend
+        backend_step = self._backend.step
         entities = self._entities
         dispatch = entities.controllers
-        contacts = entities.contacts
+        listeners = dispatch.collision_listeners
+        contact_events = entities.contacts.events
         cameras = self._cameras
         events = self._events
+        wanted, emit = events.wanted, events.emit
+        odometry = entities.odometry
+        dt = self._dt
         for _ in range(n):
             if self._outbox:
                 self.deliver_messages()
             if self._wrench:
-                for (entity, part), (force, torque) in self._wrench.items():
-                    backend.apply_wrench(entity, part, force, torque)
-                self._wrench.clear()
-            backend.step()
+                self._apply_wrenches()
+            backend_step()
             self._step_count = step = self._step_count + 1
-            time = step * self._dt
-            if dispatch.collision_listeners or events.wanted("collision"):
-                for entity, part, other in contacts.events(step):
-                    event = CollisionEvent(entity, part, other, time)
+            if listeners or wanted("collision"):
+                for entity, part, other in contact_events(step):
+                    event = CollisionEvent(entity, part, other, step * dt)
                     dispatch.collision(event)
-                    events.emit("collision", event)
+                    emit("collision", event)
             if dispatch.has_actions:
-                dispatch.actions(step, time)
+                dispatch.actions(step, step * dt)
             for lidar in entities.lidars:
-                if step % lidar.period_steps == 0:
-                    events.emit("scan", lidar.scan(backend, time))
+                if not step % lidar.period_steps:
+                    emit("scan", lidar.scan(self._backend, step * dt))
             if cameras.every and (step % cameras.every == 0 or cameras.in_flight):
                 cameras.capture(step)
-            for odo in entities.odometry.values():
-                odo.update(backend, time)
-            events.emit("step", self)
+            if odometry:
+                for odo in odometry.values():
+                    odo.update(self._backend, step * dt)
+            emit("step", self)
+
+    def _apply_wrenches(self) -> None:
+        """Apply the forces and torques queued since the last step (they last one step)."""
+        for (entity, part), (force, torque) in self._wrench.items():
+            self._backend.apply_wrench(entity, part, force, torque)
+        self._wrench.clear()
 
     def reset(self, despawn: bool = True) -> None:
         """Restore the world's initial state; time goes on forward. Grasps, forces and queued messages are

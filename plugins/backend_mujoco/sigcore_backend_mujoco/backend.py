@@ -156,8 +156,13 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
     def _after_step(self) -> None:
         d = self.data
         if self._held_qpos.size:
-            d.qpos[self._held_qpos] = self._held_values
-            d.qvel[self._held_dofs] = 0.0
+            qpos, qvel = self._hold_views
+            if qpos is not None and qvel is not None:
+                qpos[:] = self._held_values
+                qvel.fill(0.0)
+            else:
+                d.qpos[self._held_qpos] = self._held_values
+                d.qvel[self._held_dofs] = 0.0
         if self._applied:
             d.xfrc_applied[:] = 0.0
             d.qfrc_applied[:] = 0.0

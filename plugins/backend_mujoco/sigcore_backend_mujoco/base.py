@@ -36,6 +36,8 @@ class MujocoBase(Backend):
     _held_qpos: np.ndarray
     _held_dofs: np.ndarray
     _held_values: np.ndarray
+    _hold_views: tuple[np.ndarray | None, np.ndarray | None]
+    """The held qpos and dofs as views of ``data.qpos`` and ``data.qvel`` (None: not one contiguous run)."""
 
     def _entity(self, name: str) -> EntityIndex:
         self.require_world()
@@ -55,6 +57,7 @@ class MujocoBase(Backend):
         self._held_qpos = np.concatenate([e.qpos for e in held]) if held else _NO_INTS
         self._held_dofs = np.concatenate([e.dofs for e in held]) if held else _NO_INTS
         self._held_values = self._hold[self._held_qpos]
+        self._hold_views = _views(self.data.qpos, self._held_qpos), _views(self.data.qvel, self._held_dofs)
         self._post = bool(self._held_qpos.size) or self._applied
 
     def _update_hold(self, e: EntityIndex) -> None:
@@ -62,3 +65,11 @@ class MujocoBase(Backend):
             self._hold[e.qpos] = self.data.qpos[e.qpos]
             self.data.qvel[e.dofs] = 0.0
             self._held_values = self._hold[self._held_qpos]
+
+
+def _views(array: np.ndarray, index: np.ndarray) -> np.ndarray | None:
+    """``array[index]`` as a view when ``index`` is one contiguous run (a held entity's qpos or dofs; written in
+    place after every step: a slice view costs a third of a fancy-indexed write), else None."""
+    if not index.size or not np.array_equal(index, np.arange(index[0], index[0] + index.size)):
+        return None
+    return array[index[0]:index[0] + index.size]
