@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from pages import PAGE_FPS
 from rosproc import CLIENTS, SimProcess, _kill, start_sim
 from sigcore_viewer.browser import Browser, missing
 
@@ -92,7 +93,7 @@ def _wall(image: np.ndarray) -> np.ndarray:
 
 def test_page_shows_the_room_and_the_robot_and_steers_the_run(running: tuple[SimProcess, Watcher, str]) -> None:
     sim, watcher, url = running
-    with Browser(url) as page:
+    with Browser(url, max_fps=PAGE_FPS) as page:
         page.wait(lambda p: "cleanup" in p.text() and "score: 0" in p.text(), 60, "the panel shows the world, score")
 
         # the picture: the room (walls all across the scene) and the robot where it stands (x = -4, the room's
@@ -131,7 +132,7 @@ def test_page_shows_the_room_and_the_robot_and_steers_the_run(running: tuple[Sim
         assert watcher.clock() == pytest.approx(still, abs=1e-9), "/clock went on after Pause"
 
         # a second browser sees the same run; the first one closing abruptly changes nothing
-        with Browser(url) as second:
+        with Browser(url, max_fps=PAGE_FPS) as second:
             second.wait(lambda p: "paused" in p.text(), 60, "the second page shows the same paused run")
             page.close()
             second.click("Play")

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from pages import PAGE_FPS
 from sigcore_viewer import commands, playback
 from sigcore_viewer.browser import Browser, missing
 from sigcore_viewer.overlays import OVERLAYS
@@ -140,7 +141,7 @@ def test_the_panel_is_a_player_and_scrubbing_shows_the_texts_of_that_moment(view
     """The panel is a player: a time slider over the 40 s, play and pause, speeds, to start and to end; step, reset,
     the pace and messages are gone, dragging is disabled. Scrubbing shows the score and events of that moment: the
     grasp at 12.5 s and not at 12.4 s; To end shows the can in its box, To start no events."""
-    with Browser(view.url) as page:
+    with Browser(view.url, max_fps=PAGE_FPS) as page:
         page.wait(lambda p: "Time [s]" in p.text() and "To end" in p.text(), 60, "the page shows the timeline")
         text = page.text()
         assert "Playback" in text and "Speed" in text and "To start" in text and "Recording" in text
@@ -174,10 +175,10 @@ def test_two_browsers_share_the_playback_and_play_advances_the_time(view: View) 
     """A second browser sees the moment the first one scrubbed to; the first one closing changes nothing; in the
     second, Play at 10x plays to the end and stops there (at 1x that would take 27 s, more than the 20 s allowed),
     and Play then Pause from the start advances the time shown and holds it."""
-    first = Browser(view.url)
+    first = Browser(view.url, max_fps=PAGE_FPS)
     try:
         first.wait(lambda p: "Time [s]" in p.text(), 60, "the page shows the timeline")
-        with Browser(view.url) as second:
+        with Browser(view.url, max_fps=PAGE_FPS) as second:
             second.wait(lambda p: "Time [s]" in p.text(), 60, "a second page shows the timeline")
             scrub(first, 12.5)
             second.wait(lambda p: "t = 12.50 s of" in p.text() and GRASP in p.text(), 30,
@@ -225,7 +226,7 @@ def test_scrubbing_puts_each_node_where_the_ground_truth_has_it(recording: Path,
     player = threading.Thread(target=play, name="playback")
     player.start()
     try:
-        with Browser(viewer.url) as page:
+        with Browser(viewer.url, max_fps=PAGE_FPS) as page:
             page.wait(lambda p: "Time [s]" in p.text(), 60, "the page shows the timeline")
             layout = next(s.layout for s in taken if s.layout is not None and s.layout.frames)
             base = layout.parts.index(("robot_000", None))
