@@ -1,5 +1,6 @@
-"""Service responses whose client's response reader is not matched (yet) are kept and sent again, not dropped
-silently by rmw (the transport runs in this process, the client in another; see sigcore_ros2/responses.py)."""
+"""Service responses, and simulate_steps' result responses, whose client's response reader is not matched (yet) are
+kept and sent again, not dropped silently by rmw (the transport runs in this process, the client in another; see
+sigcore_ros2/responses.py and sigcore_ros2/action.py)."""
 
 from __future__ import annotations
 
@@ -85,6 +86,51 @@ def test_an_undeliverable_response_is_tried_again_then_dropped_with_a_warning(
     assert longest < 1.0, longest
 
 
-def _dropped(caplog: pytest.LogCaptureFixture) -> list[str]:
-    """The warnings saying a response was dropped."""
-    return [r.getMessage() for r in caplog.records if "a response was dropped" in r.getMessage()]
+def _dropped(caplog: pytest.LogCaptureFixture, says: str = "a response was dropped") -> list[str]:
+    """The warnings saying a response was dropped (``says``)."""
+    return [r.getMessage() for r in caplog.records if says in r.getMessage()]
+
+
+def test_an_undeliverable_action_result_is_tried_again_then_dropped_with_a_warning(
+        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    """A simulate_steps client whose get_result response reader never matches (incompatible durability, a real rmw
+    failure on each send): its goal is accepted and its 5 steps are taken, and the result response is tried again
+    (more than one try), then dropped after GIVE_UP with a warning naming the action; the simulation thread is never
+    blocked by it for more than 1 s (stated margin: the tries run on the action node's executor thread)."""
+    from sigcore_ros2 import responses
+
+    monkeypatch.setattr(responses, "GIVE_UP", 1.0)
+    sim, transport, env = start_in_process(monkeypatch, WORLD)
+    longest = 0.0
+    try:
+        with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
+            proc = subprocess.Popen([sys.executable, str(CLIENTS / "unmatched_result.py")], env=env, text=True,
+                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                    start_new_session=True)
+            try:
+                end = time.monotonic() + 120.0  # a bound only: discovery on a loaded machine
+                while not _dropped(caplog, "a result response was dropped") and time.monotonic() < end \
+                        and proc.poll() is None:
+                    t = time.monotonic()  # this thread is the simulation thread
+                    transport.service(0.05)
+                    if sim.control.take_step():
+                        sim.step()
+                    longest = max(longest, time.monotonic() - t)
+                assert proc.stdin is not None
+                proc.stdin.write("stop\n")
+                proc.stdin.flush()
+                out, err = proc.communicate(timeout=30)
+            finally:
+                if proc.poll() is None:
+                    os.killpg(proc.pid, 9)
+    finally:
+        transport.stop()
+    assert proc.returncode == 0, err[-3000:]
+    result = json.loads(out.strip().splitlines()[-1])
+    assert result == {"accepted": True, "result": False}, result  # the case is real
+    assert sim.step_count == 5  # the goal ran
+    dropped = _dropped(caplog, "a result response was dropped")
+    assert len(dropped) == 1 and dropped[0].startswith("/simulate_steps: "), dropped
+    tries = int(dropped[0].split(" tries")[0].rsplit("(", 1)[1])
+    assert tries >= 2, dropped  # tried again, not dropped at once
+    assert longest < 1.0, longest

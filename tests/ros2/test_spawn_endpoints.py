@@ -47,9 +47,10 @@ def test_a_queued_request_of_a_deleted_agent_is_refused(monkeypatch: pytest.Monk
             time.sleep(0.01)
         assert transport._receiver.pending, "the request did not arrive within 30 s"
         sim.entities.delete(["crate"])
-        for _ in range(100):  # serve on (nothing of crate's is left to serve)
-            transport.service(0.01)
-        out, err = proc.communicate(timeout=40)
+        end = time.monotonic() + 40.0
+        while proc.poll() is None and time.monotonic() < end:  # serve on until the client has its answer: the
+            transport.service(0.01)  # refusal may wait for the client's response reader (then it is tried again)
+        out, err = proc.communicate(timeout=5)
         assert proc.returncode == 0, err[-3000:]
         answer = json.loads(out.strip().splitlines()[-1])["answer"]
         assert answer is not None and answer["success"] is False
@@ -86,3 +87,57 @@ def test_spawned_agents_follow_the_sigros_agents_selection(monkeypatch: pytest.M
         assert not [n for n in transport.endpoints if "rover" in n]
     finally:
         transport.stop()
+
+
+def test_a_refusal_that_cannot_be_delivered_yet_is_tried_again_before_its_service_is_destroyed(
+        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
+    """A spawned box's service gets requests from a client whose response reader never matches (incompatible
+    durability: a real rmw timeout on each send); the box is deleted while one is queued: its refusal is kept and
+    tried again, the service stays alive (out of the transport's endpoints and the receiver) until the refusal is
+    dropped after GIVE_UP, and is destroyed then, not before."""
+    import logging
+
+    from sigcore_ros2 import responses
+
+    monkeypatch.setattr(responses, "GIVE_UP", 1.0)
+    sim, transport, env = start_in_process(monkeypatch, WORLD, Ros2Config(sigros_agents=("all",)))
+    assert transport.sigros is not None
+    node = transport.sigros.node
+    proc = None
+    try:
+        assert sim.entities.spawn([SpawnRequest(name="crate", resource=BOX, xyz=(1.0, -1.0, 0.05))]) == ["crate"]
+        proc = subprocess.Popen([sys.executable, str(CLIENTS / "unmatched_call.py"), "/crate_get_obj_position",
+                                 "sigcore_msgs/srv/GetObjPosition"], env=env, text=True, stdin=subprocess.PIPE,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        end = time.monotonic() + 60.0
+        while not transport._receiver.pending and time.monotonic() < end:  # a request arrives; not served
+            time.sleep(0.01)
+        assert transport._receiver.pending, "the request did not arrive within 60 s"
+        with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
+            sim.entities.delete(["crate"])
+            alive_after_delete = any(s.srv_name.lstrip("/") == "crate_get_obj_position" for s in node.services)
+            end = time.monotonic() + 30.0  # GIVE_UP (1 s) and a round are enough; a bound for a loaded machine
+            while not _dropped(caplog) and time.monotonic() < end:
+                transport.service(0.05)
+            transport.service(0.05)
+        dropped = _dropped(caplog)
+        alive_at_end = any(s.srv_name.lstrip("/") == "crate_get_obj_position" for s in node.services)
+        assert proc.stdin is not None
+        proc.stdin.write("stop\n")
+        proc.stdin.flush()
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc is not None and proc.poll() is None:
+            os.killpg(proc.pid, 9)
+        transport.stop()
+    assert proc.returncode == 0, err[-3000:]
+    assert json.loads(out.strip().splitlines()[-1])["answered"] is False  # the case is real
+    assert alive_after_delete  # kept alive while its refusal waits
+    assert dropped and all(m.startswith("crate_get_obj_position: ") for m in dropped), dropped
+    assert not alive_at_end  # destroyed once the refusal was dropped
+    assert not [name for name in transport.endpoints if "crate" in name]
+
+
+def _dropped(caplog: pytest.LogCaptureFixture) -> list[str]:
+    """The warnings saying a response was dropped."""
+    return [r.getMessage() for r in caplog.records if "a response was dropped" in r.getMessage()]

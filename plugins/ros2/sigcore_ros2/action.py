@@ -3,8 +3,10 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 import threading
+import time
 from typing import TYPE_CHECKING, Any
 
 from simulation_interfaces.msg import Result, SimulationState
@@ -12,6 +14,7 @@ from simulation_interfaces.msg import Result, SimulationState
 from sigcore.api.call import log_key
 from sigcore.text import clip
 
+from . import responses
 from .exceptions import Refusal
 from .siminterfaces import MAX_STEPS, SimInterfaces, StepWaiter
 
@@ -57,11 +60,12 @@ class SimulateStepsAction:
         self._running = 0
         self._lock = threading.Lock()
         self._accept, self._reject = GoalResponse.ACCEPT, GoalResponse.REJECT
-        self.server = ActionServer(node, SimulateSteps, name, execute_callback=self._execute,
-                                   goal_callback=self._goal,
-                                   cancel_callback=lambda _g: CancelResponse.ACCEPT,
-                                   callback_group=ReentrantCallbackGroup(),
-                                   feedback_pub_qos_profile=QoSProfile(depth=FEEDBACK_DEPTH))
+        self.server = _patient(ActionServer)(node, SimulateSteps, name, execute_callback=self._execute,
+                                             goal_callback=self._goal,
+                                             cancel_callback=lambda _g: CancelResponse.ACCEPT,
+                                             callback_group=ReentrantCallbackGroup(),
+                                             feedback_pub_qos_profile=QoSProfile(depth=FEEDBACK_DEPTH))
+        self.server.sigcore_name = name
 
     def _goal(self, _request: Any) -> Any:
         """Accept a goal while fewer than :data:`MAX_RUNNING` run (it counts as running from here on)."""
@@ -156,3 +160,51 @@ class SimulateStepsAction:
         else:
             goal.abort()
         return action.Result(result=result)
+
+
+@functools.cache
+def _patient(base: type) -> type:
+    """``rclpy.action.ActionServer`` whose result responses wait for their client, as :mod:`.responses` does for
+    services: rclpy sends a ``get_result`` response once, and rmw drops it when the client's response reader is not
+    discovered yet (on a loaded machine a client calls ``get_result`` right after its goal was accepted, or before any
+    goal, seconds before that); the client then waits for its result forever. Here a send that fails is tried again
+    every :data:`~.responses.RETRY_PERIOD` until :data:`~.responses.GIVE_UP` (then a warning names the action). The
+    tries block one of the action node's executor threads (:data:`FREE_THREADS` are never held by goals)."""
+
+    class PatientActionServer(base):  # type: ignore[valid-type,misc]
+        async def _execute_get_result_request(self, request_header_and_message: Any) -> None:
+            header, request = request_header_and_message
+            future = self._result_futures.get(bytes(request.goal_id.uuid))
+            if future is None:  # no such goal (never sent, or expired): its status is unknown, at once
+                from action_msgs.msg import GoalStatus
+
+                response = self._action_type.Impl.GetResultService.Response()
+                response.status = GoalStatus.STATUS_UNKNOWN
+                self.send_result_patiently(header, response)
+                return
+            future.add_done_callback(functools.partial(self._send_result_response, header))
+
+        def _send_result_response(self, request_header: Any, future: Any) -> None:
+            self.send_result_patiently(request_header, future.result())
+
+        def send_result_patiently(self, header: Any, response: Any) -> bool:
+            """Send a ``get_result`` response; try again while rmw cannot deliver it. Whether it went out."""
+            from rclpy.impl.implementation_singleton import rclpy_implementation
+
+            first, tries = time.monotonic(), 0
+            while True:
+                tries += 1
+                try:
+                    if responses.delivered(lambda: self._handle.send_result_response(header, response)):
+                        return True
+                except rclpy_implementation.RCLError as e:  # e.g. the server is being destroyed: nobody to wait for
+                    log.debug("%s: a result response was not sent (%s)", self.sigcore_name, clip(str(e), 200))
+                    return False
+                if time.monotonic() - first >= responses.GIVE_UP:
+                    log.warning("%s: a result response was dropped: the client's response reader was not discovered "
+                                "within %g s (%d tries); the client waits in vain", self.sigcore_name,
+                                responses.GIVE_UP, tries, extra=log_key(self.sigcore_name, "unsent result"))
+                    return False
+                time.sleep(responses.RETRY_PERIOD)
+
+    return PatientActionServer

@@ -111,7 +111,6 @@ class Receiver:
                     refuse(job.entity, *job.args)
                 except Exception as e:  # answering a held request must not stop the simulation
                     _failed(job.endpoint, "refusing a request of a retired endpoint", e)
-        self.responder.forget(gone)  # after the refusals above, which may have been kept too
         if not released:
             log.error("the ROS 2 receiver threads did not let go of %d retired endpoints within %g s; they are "
                       "kept (not destroyed)", len(gone), timeout)

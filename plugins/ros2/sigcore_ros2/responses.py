@@ -21,6 +21,7 @@ from __future__ import annotations
 import logging
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -51,6 +52,7 @@ class Responder:
 
     def __init__(self) -> None:
         self._unsent: list[_Unsent] = []
+        self._destroys: list[tuple[Any, Callable[[], object]]] = []
         self._next = 0.0
         self.retried = 0
         """Responses that went out on a later try (each would have been lost without it)."""
@@ -107,22 +109,46 @@ class Responder:
                         extra=log_key(u.srv.srv_name, "unsent response"))
         self._unsent = [u for u in pending if u not in expired] + kept
         self._next = now + RETRY_PERIOD
+        self._destroy_done()
 
-    def forget(self, gone: set[int]) -> None:
-        """Drop the kept responses of services that are being destroyed (``id()`` of the service objects)."""
-        self._unsent = [u for u in self._unsent if id(u.srv) not in gone]
+    def then_destroy(self, srv: Any, destroy: Callable[[], object]) -> None:
+        """Call ``destroy`` (of a retired service: nothing new reaches it) once no response of ``srv`` is kept: now,
+        or after a later round sent or dropped its last (at most :data:`GIVE_UP` later). A refusal sent as the
+        service is retired (its agent was deleted) is thus still tried again instead of being lost with it."""
+        if any(u.srv is srv for u in self._unsent):
+            self._destroys.append((srv, destroy))
+        else:
+            destroy()
+
+    def _destroy_done(self) -> None:
+        """Destroy the retired services whose kept responses are all gone."""
+        if not self._destroys:
+            return
+        waiting = {id(u.srv) for u in self._unsent}
+        due = [(srv, destroy) for srv, destroy in self._destroys if id(srv) not in waiting]
+        self._destroys = [(srv, destroy) for srv, destroy in self._destroys if id(srv) in waiting]
+        for srv, destroy in due:
+            try:
+                destroy()
+            except Exception as e:  # destroying must never stop the simulation
+                log.warning("%s: destroying a retired service failed: %s: %s", srv.srv_name, type(e).__name__, e)
 
 
 def _send(srv: Any, response: Any, header: Any) -> bool:
-    """rclpy's own ``Service.send_response``; False when rmw timed out waiting for the client's response reader.
+    """rclpy's own ``Service.send_response``; False when rmw timed out waiting for the client's response reader."""
+    return delivered(lambda: type(srv).send_response(srv, response, header))
 
-    rclpy reports that timeout only as a ``RuntimeWarning``, so the warnings are caught (about 4 µs a response);
-    any other warning is passed on. ``catch_warnings`` is process-wide: a warning another thread raises meanwhile
-    is passed on from here.
+
+def delivered(send: Callable[[], None]) -> bool:
+    """Call ``send`` (an rclpy send of a response); False when rmw timed out waiting for the client's response reader.
+
+    rclpy reports that timeout only as a ``RuntimeWarning`` (for services and for actions' services alike), so the
+    warnings are caught (about 4 µs a response); any other warning is passed on. ``catch_warnings`` is process-wide: a
+    warning another thread raises meanwhile is passed on from here.
     """
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RuntimeWarning)
-        type(srv).send_response(srv, response, header)
+        send()
     timed_out = False
     for w in caught:
         if issubclass(w.category, RuntimeWarning) and _TIMEOUT in str(w.message):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 from collections.abc import Collection
 from dataclasses import dataclass
@@ -94,8 +95,8 @@ class SigRosEndpoints:
             if released:
                 if isinstance(entity, Subscription):
                     self.node.destroy_subscription(entity)
-                else:
-                    self.node.destroy_service(entity)
+                else:  # once its refusals went out (one may wait for its client's response reader)
+                    self.receiver.responder.then_destroy(entity, functools.partial(self.node.destroy_service, entity))
 
     def _create(self, plan: list[tuple[ApiEntry, str]]) -> None:
         node, receiver, qos = self.node, self.receiver, self.qos
