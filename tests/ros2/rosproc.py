@@ -6,6 +6,7 @@ Every process runs in its own session and is killed by process group in ``finall
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -46,6 +47,35 @@ def _kill(proc: subprocess.Popen[str]) -> None:
         except ProcessLookupError:
             pass
         proc.wait(timeout=5)
+
+
+@contextlib.contextmanager
+def client_process(env: dict[str, str], script: str, *args: str,
+                   stdin: bool = False) -> Iterator[subprocess.Popen[str]]:
+    """``clients/<script>`` with ``env`` in its own session, stdout and stderr piped (stdin too if asked; see
+    :func:`tell_stop`); its process group is killed on leaving the block if it still runs."""
+    proc = subprocess.Popen([sys.executable, str(CLIENTS / script), *args], env=env, text=True,
+                            stdin=subprocess.PIPE if stdin else None, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, start_new_session=True)
+    try:
+        yield proc
+    finally:
+        _kill(proc)
+
+
+def tell_stop(proc: subprocess.Popen[str]) -> None:
+    """Write the line a client that waits on its stdin stops at (nothing if it has ended)."""
+    assert proc.stdin is not None
+    try:
+        proc.stdin.write("stop\n")
+        proc.stdin.flush()
+    except BrokenPipeError:  # it has ended already
+        pass
+
+
+def last_json(out: str) -> dict:
+    """A client's JSON result: the last line it printed."""
+    return json.loads(out.strip().splitlines()[-1])
 
 
 class SimProcess:

@@ -4,11 +4,7 @@ sigcore_ros2/responses.py and sigcore_ros2/action.py)."""
 
 from __future__ import annotations
 
-import json
 import logging
-import os
-import subprocess
-import sys
 import time
 
 import pytest
@@ -16,7 +12,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
-from rosproc import CLIENTS, WORLD, start_in_process  # noqa: E402
+from rosproc import WORLD, client_process, last_json, start_in_process, tell_stop  # noqa: E402
 
 pytestmark = pytest.mark.ros2
 
@@ -48,11 +44,8 @@ def test_an_undeliverable_response_is_tried_again_then_dropped_with_a_warning(
     longest = 0.0
     try:
         with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
-            proc = subprocess.Popen([sys.executable, str(CLIENTS / "unmatched_call.py")], env=env, text=True,
-                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                    start_new_session=True)
             told = False
-            try:
+            with client_process(env, "unmatched_call.py", stdin=True) as proc:
                 end = None
                 # past GIVE_UP and a round for the last request (3 s), and on until a response was dropped, at most
                 # 30 s after the client ended (a loaded machine delays the requests' arrival and the rounds)
@@ -61,21 +54,16 @@ def test_an_undeliverable_response_is_tried_again_then_dropped_with_a_warning(
                     transport.service(0.05)
                     longest = max(longest, time.monotonic() - t)
                     if not told and len(requests) >= 4:  # 4 requests arrived (discovery done): the client stops
-                        assert proc.stdin is not None
-                        proc.stdin.write("stop\n")
-                        proc.stdin.flush()
+                        tell_stop(proc)
                         told = True
                     if end is None and proc.poll() is not None:
                         end = (time.monotonic() + 3.0, time.monotonic() + 30.0)
                 out, err = proc.communicate(timeout=5)
-            finally:
-                if proc.poll() is None:
-                    os.killpg(proc.pid, 9)
         kept = len(transport._receiver.responder._unsent)
     finally:
         transport.stop()
     assert proc.returncode == 0, err[-3000:]
-    result = json.loads(out.strip().splitlines()[-1])
+    result = last_json(out)
     assert requests, "no request of the client arrived within 60 s"
     assert result["answered"] is False  # the client could never receive it: the case is real
     dropped = _dropped(caplog)
@@ -104,10 +92,7 @@ def test_an_undeliverable_action_result_is_tried_again_then_dropped_with_a_warni
     longest = 0.0
     try:
         with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
-            proc = subprocess.Popen([sys.executable, str(CLIENTS / "unmatched_result.py")], env=env, text=True,
-                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                    start_new_session=True)
-            try:
+            with client_process(env, "unmatched_result.py", stdin=True) as proc:
                 end = time.monotonic() + 120.0  # a bound only: discovery on a loaded machine
                 while not _dropped(caplog, "a result response was dropped") and time.monotonic() < end \
                         and proc.poll() is None:
@@ -116,17 +101,12 @@ def test_an_undeliverable_action_result_is_tried_again_then_dropped_with_a_warni
                     if sim.control.take_step():
                         sim.step()
                     longest = max(longest, time.monotonic() - t)
-                assert proc.stdin is not None
-                proc.stdin.write("stop\n")
-                proc.stdin.flush()
+                tell_stop(proc)
                 out, err = proc.communicate(timeout=30)
-            finally:
-                if proc.poll() is None:
-                    os.killpg(proc.pid, 9)
     finally:
         transport.stop()
     assert proc.returncode == 0, err[-3000:]
-    result = json.loads(out.strip().splitlines()[-1])
+    result = last_json(out)
     assert result == {"accepted": True, "result": False}, result  # the case is real
     assert sim.step_count == 5  # the goal ran
     dropped = _dropped(caplog, "a result response was dropped")

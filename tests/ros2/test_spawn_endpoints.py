@@ -3,10 +3,7 @@ request still queued when the robot is deleted is answered with a refusal, and i
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
+import contextlib
 import time
 
 import pytest
@@ -14,7 +11,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
-from rosproc import CLIENTS, WORLD, ros_env, start_in_process  # noqa: E402
+from rosproc import WORLD, client_process, last_json, ros_env, start_in_process, tell_stop  # noqa: E402
 from sigcore_ros2.config import Ros2Config  # noqa: E402
 from sigcore_ros2.transport import Ros2Transport  # noqa: E402
 
@@ -33,34 +30,29 @@ def test_a_queued_request_of_a_deleted_agent_is_refused(monkeypatch: pytest.Monk
     receiver, while another spawned agent's are there (every agent selected: a plain box has no endpoints of its
     own by default)."""
     sim, transport, env = start_in_process(monkeypatch, WORLD, Ros2Config(sigros_agents=("all",)))
-    proc = None
     try:
         assert sim.entities.spawn([SpawnRequest(name="crate", resource=BOX, xyz=(1.0, -1.0, 0.05)),
                           SpawnRequest(name="other", resource=BOX, xyz=(-1.0, -1.0, 0.05), namespace="/ns")]) \
             == ["crate", "other"]
         assert "crate_get_obj_position" in transport.endpoints and "/ns/other_get_obj_position" in transport.endpoints
-        proc = subprocess.Popen([sys.executable, str(CLIENTS / "call_deleted.py"), "/crate_get_obj_position"],
-                                env=env, text=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                start_new_session=True)
-        end = time.monotonic() + 30.0
-        while not transport._receiver.pending and time.monotonic() < end:  # the request arrives; not served
-            time.sleep(0.01)
-        assert transport._receiver.pending, "the request did not arrive within 30 s"
-        sim.entities.delete(["crate"])
-        end = time.monotonic() + 40.0
-        while proc.poll() is None and time.monotonic() < end:  # serve on until the client has its answer: the
-            transport.service(0.01)  # refusal may wait for the client's response reader (then it is tried again)
-        out, err = proc.communicate(timeout=5)
+        with client_process(env, "call_deleted.py", "/crate_get_obj_position") as proc:
+            end = time.monotonic() + 30.0
+            while not transport._receiver.pending and time.monotonic() < end:  # the request arrives; not served
+                time.sleep(0.01)
+            assert transport._receiver.pending, "the request did not arrive within 30 s"
+            sim.entities.delete(["crate"])
+            end = time.monotonic() + 40.0
+            while proc.poll() is None and time.monotonic() < end:  # serve on until the client has its answer: the
+                transport.service(0.01)  # refusal may wait for the client's response reader (then tried again)
+            out, err = proc.communicate(timeout=5)
         assert proc.returncode == 0, err[-3000:]
-        answer = json.loads(out.strip().splitlines()[-1])["answer"]
+        answer = last_json(out)["answer"]
         assert answer is not None and answer["success"] is False
         assert "deleted" in answer["message"]
         assert not [name for name in transport.endpoints if "crate" in name]
         assert not [s for s, _ in transport._receiver._srvs if "crate" in s.srv_name]
         assert "/ns/other_get_obj_position" in transport.endpoints
     finally:
-        if proc is not None and proc.poll() is None:
-            os.killpg(proc.pid, 9)
         transport.stop()
 
 
@@ -103,12 +95,11 @@ def test_a_refusal_that_cannot_be_delivered_yet_is_tried_again_before_its_servic
     sim, transport, env = start_in_process(monkeypatch, WORLD, Ros2Config(sigros_agents=("all",)))
     assert transport.sigros is not None
     node = transport.sigros.node
-    proc = None
+    stack = contextlib.ExitStack()
     try:
         assert sim.entities.spawn([SpawnRequest(name="crate", resource=BOX, xyz=(1.0, -1.0, 0.05))]) == ["crate"]
-        proc = subprocess.Popen([sys.executable, str(CLIENTS / "unmatched_call.py"), "/crate_get_obj_position",
-                                 "sigcore_msgs/srv/GetObjPosition"], env=env, text=True, stdin=subprocess.PIPE,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        proc = stack.enter_context(client_process(env, "unmatched_call.py", "/crate_get_obj_position",
+                                                  "sigcore_msgs/srv/GetObjPosition", stdin=True))
         end = time.monotonic() + 60.0
         while not transport._receiver.pending and time.monotonic() < end:  # a request arrives; not served
             time.sleep(0.01)
@@ -122,16 +113,13 @@ def test_a_refusal_that_cannot_be_delivered_yet_is_tried_again_before_its_servic
             transport.service(0.05)
         dropped = _dropped(caplog)
         alive_at_end = any(s.srv_name.lstrip("/") == "crate_get_obj_position" for s in node.services)
-        assert proc.stdin is not None
-        proc.stdin.write("stop\n")
-        proc.stdin.flush()
+        tell_stop(proc)
         out, err = proc.communicate(timeout=30)
     finally:
-        if proc is not None and proc.poll() is None:
-            os.killpg(proc.pid, 9)
+        stack.close()
         transport.stop()
     assert proc.returncode == 0, err[-3000:]
-    assert json.loads(out.strip().splitlines()[-1])["answered"] is False  # the case is real
+    assert last_json(out)["answered"] is False  # the case is real
     assert alive_after_delete  # kept alive while its refusal waits
     assert dropped and all(m.startswith("crate_get_obj_position: ") for m in dropped), dropped
     assert not alive_at_end  # destroyed once the refusal was dropped

@@ -3,11 +3,7 @@ executor keeps serving (the transport runs in this process, the client in anothe
 
 from __future__ import annotations
 
-import json
 import logging
-import os
-import subprocess
-import sys
 from typing import Any
 
 import pytest
@@ -15,7 +11,7 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
 pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not installed")
 
-from rosproc import CLIENTS, WORLD, start_in_process  # noqa: E402
+from rosproc import WORLD, client_process, last_json, start_in_process  # noqa: E402
 
 pytestmark = pytest.mark.ros2
 
@@ -34,19 +30,14 @@ def test_a_raising_executor_callback_is_logged_once_and_the_executor_serves_on(
         assert len(raising) == 1
         raising[0].callback = boom
         with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
-            proc = subprocess.Popen([sys.executable, str(CLIENTS / "raising.py")], env=env, text=True,
-                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
-            try:
+            with client_process(env, "raising.py") as proc:
                 while proc.poll() is None:  # this thread is the simulation thread: serve the main node
                     transport.service(0.05)
                 out, err = proc.communicate(timeout=5)
-            finally:
-                if proc.poll() is None:
-                    os.killpg(proc.pid, 9)
     finally:
         transport.stop()
     assert proc.returncode == 0, err[-3000:]
-    result = json.loads(out.strip().splitlines()[-1])
+    result = last_json(out)
     assert result["raising"] == [False, False]  # no answer, but no end of the executor either
     assert result["/sigcore_actions"] == result["/sigcore"] == ["use_sim_time", "start_type_description_service"]
     errors = [r for r in caplog.records if r.levelno == logging.ERROR]
