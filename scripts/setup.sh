@@ -5,7 +5,8 @@
 # The viewer's browser tests need Debian's chromium and chromium-driver: installed with apt-get when run as root,
 # else the command to run is printed (SIGCORE_NO_BROWSER=1 skips them). Cameras render headless through Mesa's EGL
 # and OSMesa (software, llvmpipe, when there is no GPU): libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6, installed
-# the same way.
+# the same way. MuJoCo's stepping loop (sigcore_backend_mujoco/_steps.c) is compiled into ~/.cache/sigcore with the
+# C compiler (gcc, installed the same way; without one MuJoCo steps from Python, the same results, slower).
 # Idempotent: a second run only checks. Usage: bash scripts/setup.sh   (SIGCORE_NO_ROS=1 skips ROS 2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -40,14 +41,20 @@ fi
 if [ -z "${SIGCORE_NO_ROS:-}" ]; then
   "$V/python" scripts/build_interfaces.py --venv .venv
 fi
-if [ -z "${SIGCORE_NO_BROWSER:-}" ] && ! { [ -x /usr/bin/chromium ] && [ -x /usr/bin/chromedriver ]; }; then
+# apt_or_say WHAT WHY PACKAGE...: install Debian packages when root with apt-get, else say what to run
+apt_or_say() {
+  local what=$1 why=$2
+  shift 2
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-    echo "setup: installing Debian's chromium and chromium-driver (the viewer's browser tests; about 1 minute)"
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >/dev/null
+    echo "setup: installing $what ($why)"
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$@" >/dev/null
   else
-    echo "setup: the viewer's browser tests need chromium and chromium-driver; as root run:" \
-      "apt-get install -y chromium chromium-driver   (or set SIGCORE_NO_BROWSER=1 to skip those tests)" >&2
+    echo "setup: $what is missing ($why); as root run: apt-get install -y $*" >&2
   fi
+}
+if [ -z "${SIGCORE_NO_BROWSER:-}" ] && ! { [ -x /usr/bin/chromium ] && [ -x /usr/bin/chromedriver ]; }; then
+  apt_or_say "Debian's chromium and chromium-driver" \
+    "the viewer's browser tests; about 1 minute; SIGCORE_NO_BROWSER=1 skips those tests" chromium chromium-driver
 fi
 gl_libs=(libEGL.so.1 libEGL_mesa.so.0 libOSMesa.so.8)
 missing_gl=0
@@ -55,13 +62,12 @@ for lib in "${gl_libs[@]}"; do
   ldconfig -p 2>/dev/null | grep -q "$lib" || missing_gl=1
 done
 if [ "$missing_gl" = 1 ]; then
-  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-    echo "setup: installing Mesa's EGL and OSMesa (cameras render headless on the CPU)"
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
-      libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6 >/dev/null
-  else
-    echo "setup: cameras need OpenGL without a display; as root run:" \
-      "apt-get install -y libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6" >&2
-  fi
+  apt_or_say "Mesa's EGL and OSMesa" "cameras render headless on the CPU" \
+    libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
 fi
+if ! command -v cc >/dev/null && ! command -v gcc >/dev/null; then
+  apt_or_say "a C compiler, gcc" "MuJoCo's stepping loop is compiled once; without it MuJoCo steps from Python, \
+about 10 % slower" gcc libc6-dev
+fi
+"$V/python" -c "from sigcore_backend_mujoco import steps; print('setup:', steps.status())"
 "$V/sigcore" plugins

@@ -159,6 +159,24 @@ class Backend(ABC):
     def step(self) -> None:
         """Advance physics by one ``world.timestep``; then clear wrenches and torques applied for this step."""
 
+    batches: bool = False
+    """Whether :meth:`step_batch` can take more than one step (the core then counts the steps it may take at once;
+    otherwise it does not spend the time)."""
+
+    def step_batch(self, n: int, contacts: bool) -> int:
+        """Take up to ``n`` steps (at least one) without coming back to the core, as ``n`` calls of :meth:`step`
+        would; return how many were taken. The core calls it when nothing is due before the ``n``-th step.
+
+        Args:
+            n: The most steps to take.
+            contacts: Someone follows contacts: stop after the first step whose contacts differ from those before
+                the call (:meth:`contacts` is then read at that step; the steps in between had the same ones).
+
+        Default: one :meth:`step` (MuJoCo takes many in a compiled loop).
+        """
+        self.step()
+        return 1
+
     @abstractmethod
     def reset(self) -> None:
         """Restore every body and joint to its state right after :meth:`build`; release all grasps; restore

@@ -68,15 +68,12 @@ def test_unknown_channel_and_non_callable_are_refused_naming_what_is_valid() -> 
         events.subscribe("step", 3)  # type: ignore[arg-type]
 
 
-def test_a_contained_failure_detaches_its_owner_even_from_the_delivery_in_progress() -> None:
-    """When the containment detaches the failing owner, the owner's later subscribers are not called, even in the
-    delivery in progress; the others are."""
-    calls: list[str] = []
-    contained: list[Subscription] = []
-
+def _feature_f_fails(calls: list[str], contained: list[Subscription], channel: Channel) -> Events:
+    """A hub whose containment detaches the failing owner (what the simulation does when it disables a feature),
+    with owner "f"'s two subscribers on ``channel``: the first raises."""
     def contain(subscription: Subscription, exc: BaseException) -> bool:
         contained.append(subscription)
-        events.detach(subscription.owner)  # what the simulation does when it disables a feature
+        events.detach(subscription.owner)
         return True
 
     def broken(_: object) -> None:
@@ -84,8 +81,65 @@ def test_a_contained_failure_detaches_its_owner_even_from_the_delivery_in_progre
         raise RuntimeError("boom")
 
     events = Events(contain)
-    events.subscribe("collision", broken, owner="f")
-    events.subscribe("collision", lambda _: calls.append("f's second"), owner="f")
+    events.subscribe(channel, broken, owner="f")
+    events.subscribe(channel, lambda _: calls.append("f's second"), owner="f")
+    return events
+
+
+def test_step_subscribers_are_called_after_the_multiples_of_their_every() -> None:
+    """``every=3`` is called after steps 3, 6, 9...; ``set_every(0)`` pauses it, ``set_every(1)`` makes it every
+    step; steps_free counts the steps up to the next one a subscriber is due at."""
+    events = Events()
+    seen: dict[str, list[int]] = {"each": [], "third": []}
+    sub = events.subscribe("step", lambda step: seen["third"].append(step), every=3)
+    assert sub.every == 3
+    assert events.steps_free(0, 100) == 3 and events.steps_free(4, 100) == 2 and events.steps_free(4, 1) == 1
+    for step in range(1, 10):
+        events.emit_step(step, step)
+    assert seen["third"] == [3, 6, 9]
+    sub.set_every(0)
+    assert events.steps_free(9, 100) == 100
+    events.emit_step(12, 12)
+    assert seen["third"] == [3, 6, 9]
+    events.subscribe("step", lambda step: seen["each"].append(step))
+    assert events.steps_free(12, 100) == 1
+    sub.set_every(1)
+    events.emit_step(13, 13)
+    assert seen == {"each": [13], "third": [3, 6, 9, 13]}
+
+
+def test_a_bad_every_is_refused_naming_what_is_valid() -> None:
+    events = Events()
+    for bad in (-1, 2.5, True, "3"):
+        with pytest.raises(ValueError, match=r"every must be a whole number of steps of at least 0 \(0: not called\), "
+                                             r"got"):
+            events.subscribe("step", print, every=bad)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="every applies to the 'step' channel only, not to 'scan'"):
+        events.subscribe("scan", print, every=5)
+    sub = events.subscribe("step", print)
+    with pytest.raises(ValueError, match="got -2"):
+        sub.set_every(-2)
+    assert sub.every == 1
+
+
+def test_a_contained_failure_of_a_step_subscriber_skips_only_its_owner_and_respects_every() -> None:
+    """A failing step subscriber is contained like on any channel: its owner is detached; the subscribers after
+    it that are due are still called in that delivery, those not due are not."""
+    calls: list[str] = []
+    events = _feature_f_fails(calls, [], "step")
+    events.subscribe("step", lambda _: calls.append("every 2"), owner="g", every=2)
+    events.subscribe("step", lambda _: calls.append("every 3"), owner="g", every=3)
+    events.emit_step(None, 2)
+    events.emit_step(None, 3)
+    assert calls == ["broken", "every 2", "every 3"]
+
+
+def test_a_contained_failure_detaches_its_owner_even_from_the_delivery_in_progress() -> None:
+    """When the containment detaches the failing owner, the owner's later subscribers are not called, even in the
+    delivery in progress; the others are."""
+    calls: list[str] = []
+    contained: list[Subscription] = []
+    events = _feature_f_fails(calls, contained, "collision")
     events.subscribe("collision", lambda _: calls.append("other"), owner="g")
     events.emit("collision", None)
     events.emit("collision", None)

@@ -125,6 +125,11 @@ class Dispatcher:
         """Whether any controller has an ``on_action`` scheduled (the step loop skips :meth:`actions` otherwise)."""
         return bool(self._action)
 
+    @property
+    def next_action(self) -> int | None:
+        """The step the next ``on_action`` is due at (None: none scheduled)."""
+        return self._action[0][0] if self._action else None
+
     def actions(self, step: int, time: float) -> None:
         """Call every ``on_action`` due at ``step`` and schedule its next call."""
         heap = self._action

@@ -8,7 +8,7 @@ feature owns, on every channel, is detached at once, and the run goes on); any o
 ==========  ==========================================  ==================================================
 channel     payload                                     emitted
 ==========  ==========================================  ==================================================
-step        the :class:`Simulation`                     after every step (keep it cheap: a step is ~60 µs)
+step        the :class:`Simulation`                     after every step, or every ``every``-th (keep it cheap)
 collision   ``sigcore.agent.events.CollisionEvent``     when a contact episode starts (``sim/contacts.py``)
 message     ``sigcore.agent.events.Message``            when a text message is delivered, before a step
 scan        ``sigcore.sim.lidar.Scan``                  when a lidar scans, after the step's physics
@@ -20,6 +20,11 @@ reset       :class:`Reset`                              after a reset restored t
 input       ``sigcore.sim.inputs.Input``                when a command from outside is noted for replay
 control     ``sigcore.sim.control.ControlChange``       when a verb of the run control was done (play, pause...)
 ==========  ==========================================  ==================================================
+
+A ``step`` subscriber that does not need every step says so with ``every`` (:meth:`Events.subscribe`,
+:meth:`Subscription.set_every`): it is called after the steps whose number is a multiple of it, or not at all while
+it is 0. While no subscriber wants the next steps, nothing else is due and the backend can, the core takes them in
+one call (MuJoCo's compiled loop): a run whose features wake up rarely steps at nearly the engine's speed.
 
 Subscribers of a channel are called in the order they subscribed. Subscribing or detaching while an event is
 being delivered takes effect from the next event, except that a subscription detached by a failure is not called
@@ -67,16 +72,29 @@ class Subscription:
         fn: The subscriber.
         owner: Who owns it (a feature's name, a transport, a world's part), or None.
         active: False once cancelled or detached.
+        every: ``step`` only: called after the steps whose number is a multiple of it; 0: not called (1 for the
+            other channels).
     """
 
-    __slots__ = ("channel", "fn", "owner", "active", "_events")
+    __slots__ = ("channel", "fn", "owner", "active", "every", "_events")
 
-    def __init__(self, events: Events, channel: Channel, fn: Subscriber, owner: Hashable | None) -> None:
+    def __init__(self, events: Events, channel: Channel, fn: Subscriber, owner: Hashable | None,
+                 every: int = 1) -> None:
         self.channel = channel
         self.fn = fn
         self.owner = owner
         self.active = True
+        self.every = _every(channel, every)
         self._events = events
+
+    def set_every(self, every: int) -> None:
+        """From the next step on, be called after the steps whose number is a multiple of ``every`` (1: every
+        step; 0: none, until set again); ``step`` subscriptions only.
+
+        Raises:
+            ValueError: not a whole number of at least 0, or not a ``step`` subscription.
+        """
+        self.every = _every(self.channel, every)
 
     def cancel(self) -> None:
         """Stop delivering to :attr:`fn` (no error if already cancelled)."""
@@ -85,6 +103,14 @@ class Subscription:
     def __repr__(self) -> str:
         name = getattr(self.fn, "__qualname__", self.fn)
         return f"Subscription({self.channel!r}, {name!r}, owner={self.owner!r}{'' if self.active else ', cancelled'})"
+
+
+def _every(channel: Channel, every: int) -> int:
+    if isinstance(every, bool) or not isinstance(every, int) or every < 0:
+        raise ValueError(f"every must be a whole number of steps of at least 0 (0: not called), got {every!r}")
+    if every != 1 and channel != "step":
+        raise ValueError(f"every applies to the 'step' channel only, not to '{channel}'")
+    return every
 
 
 class Events:
@@ -108,16 +134,20 @@ class Events:
         self._scope: list[Hashable] = []
 
     # ------------------------------------------------------------------ subscribing
-    def subscribe(self, channel: Channel, fn: Subscriber, owner: Hashable | None = None) -> Subscription:
+    def subscribe(self, channel: Channel, fn: Subscriber, owner: Hashable | None = None,
+                  every: int = 1) -> Subscription:
         """Call ``fn(payload)`` on every event of ``channel`` from now on.
 
         Args:
             channel: One of :data:`CHANNELS`.
             fn: The subscriber.
             owner: Who owns it; default: the owner of the enclosing :meth:`owned_by`, else ``owner_of(fn)``.
+            every: ``step`` only: call it after the steps whose number is a multiple of ``every`` (0: not until
+                :meth:`Subscription.set_every`).
 
         Raises:
-            ValueError: ``channel`` is not a channel (lists them); ``fn`` is not callable.
+            ValueError: ``channel`` is not a channel (lists them); ``fn`` is not callable; ``every`` is not a
+                whole number of at least 0, or not 1 on another channel than ``step``.
         """
         if channel not in self._lists:
             raise ValueError(f"no event channel {channel!r}; channels: {', '.join(CHANNELS)}")
@@ -125,7 +155,7 @@ class Events:
             raise ValueError(f"a subscriber of '{channel}' must be callable, got {type(fn).__name__}")
         if owner is None:
             owner = self._scope[-1] if self._scope else (self._owner_of(fn) if self._owner_of else None)
-        subscription = Subscription(self, channel, fn, owner)
+        subscription = Subscription(self, channel, fn, owner, every)
         fns, subs = self._lists[channel]
         call = partial(fn) if any(f is fn for f in fns) else fn  # unique in the tuple: a failure finds its place
         self._lists[channel] = (fns + (call,), subs + (subscription,))
@@ -170,7 +200,35 @@ class Events:
         """Whether anyone subscribed to ``channel`` (an emitter may skip the work of making a payload)."""
         return bool(self._lists[channel][0])
 
+    def steps_free(self, step: int, limit: int) -> int:
+        """After step ``step``, how many more steps may be taken before a ``step`` subscriber is due: the number of
+        steps up to and including the next one a subscriber is called after, at most ``limit``."""
+        free = limit
+        for subscription in self._lists["step"][1]:
+            every = subscription.every
+            if every == 1:
+                return 1
+            if every:
+                free = min(free, every - step % every)
+        return free
+
     # ------------------------------------------------------------------ emitting
+    def emit_step(self, payload: object, step: int) -> None:
+        """Deliver ``payload`` on ``step`` after step number ``step``: to the subscribers due at it (``every``)."""
+        fns, subs = self._lists["step"]
+        if not fns:
+            return
+        try:
+            for fn, subscription in zip(fns, subs):  # noqa: B905 - the same length, made together
+                every = subscription.every
+                if every == 1 or (every and not step % every):
+                    fn(payload)
+        except USER_ERRORS as e:
+            i = next(k for k, f in enumerate(fns) if f is fn)
+            self._failed(subs[i], e)
+            rest = [(f, s) for f, s in zip(fns[i + 1:], subs[i + 1:]) if s.every and not step % s.every]  # noqa: B905
+            self._deliver_rest(tuple(f for f, _ in rest), tuple(s for _, s in rest), payload)
+
     def emit(self, channel: Channel, payload: object) -> None:
         """Deliver ``payload`` to every subscriber of ``channel``, in subscription order.
 

@@ -12,6 +12,7 @@ __all__ = ["RunControl", "RunReport", "run"]
 
 from ..isolation import USER_ERRORS, describe
 from ..transport import Transport
+from .batching import BATCH_STEPS
 from .control import RunControl, stop_on_signals
 from .dispatch import ControllerFailure, SlowCallbacks
 from .features import FeatureFailure
@@ -211,7 +212,13 @@ def _loop(sim: Simulation, target: int | None, start_step: int, control: RunCont
             sim.cameras.settle()  # idle: the images of the last steps are published now, not at the next step
             pace_time, pace_wall = sim.time, _time.perf_counter()  # no catching up after a pause
             continue
-        sim.step()
+        if transport is None and realtime_factor is None and not control.paused:
+            # nobody outside can act between steps: take up to a batch at once (the step loop lets the backend take
+            # the steps after which nothing is due in one call), ending after a step at which a stop was asked
+            left = BATCH_STEPS if target is None else target - (sim.worlds.elapsed_steps - start_step)
+            sim.step(max(1, min(left, BATCH_STEPS)), until_stop=True)
+        else:
+            sim.step()
         now = _time.perf_counter()
         if realtime_factor is not None:
             ahead = (sim.time - pace_time) / realtime_factor - (now - pace_wall)

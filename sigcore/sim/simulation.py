@@ -27,6 +27,7 @@ from ..scene import Scene
 from ..text import quote
 from ..world.models import Entity, Robot, World
 from .agent_topics import AgentTopics
+from .batching import free_steps
 from .camera import Cameras
 from .control import RunControl
 from .events import Events, Reset, Subscriber, Subscription
@@ -306,8 +307,12 @@ class Simulation:
         self._cameras.settle()
         plugins.notify("sigcore_simulation_stopped", simulation=self)
 
-    def step(self, n: int = 1) -> None:
+    def step(self, n: int = 1, *, until_stop: bool = False) -> None:
         """Advance ``n`` fixed steps: messages, forces, physics, contacts, controllers, sensors, the ``step`` channel.
+
+        Steps after which nothing is due are taken by the backend in one call (:mod:`sigcore.sim.batching`); the
+        results are the same as ``n`` single steps. ``until_stop``: also end after the step at which the run control
+        was asked to stop (the run loop's batches).
 
         Raises:
             ApiError: no world is loaded (``worlds.unload``).
@@ -316,7 +321,7 @@ class Simulation:
             raise ApiError("no world is loaded: nothing to step; load one first (load_world)")
         if not self._started:
             self.start()
-        backend_step = self._backend.step
+        backend = self._backend
         entities = self._entities
         dispatch = entities.controllers
         listeners = dispatch.collision_listeners
@@ -326,14 +331,23 @@ class Simulation:
         wanted, emit = events.wanted, events.emit
         odometry = entities.odometry
         dt = self._dt
-        for _ in range(n):
+        control = self._control
+        batching = n > 1 and backend.batches
+        while n > 0 and not (until_stop and (control.stopping or self._backend is not backend)):
             if self._outbox:
                 self.deliver_messages()
             if self._wrench:
                 self._apply_wrenches()
-            backend_step()
-            self._step_count = step = self._step_count + 1
-            if listeners or wanted("collision"):
+            track = bool(listeners) or wanted("collision")
+            free = free_steps(entities, cameras, events, self._step_count, n) if batching and n > 1 else 1
+            if free > 1:
+                taken = backend.step_batch(free, track)
+            else:
+                backend.step()
+                taken = 1
+            n -= taken
+            self._step_count = step = self._step_count + taken
+            if track:
                 for entity, part, other in contact_events(step):
                     event = CollisionEvent(entity, part, other, step * dt)
                     dispatch.collision(event)
@@ -342,13 +356,13 @@ class Simulation:
                 dispatch.actions(step, step * dt)
             for lidar in entities.lidars:
                 if not step % lidar.period_steps:
-                    emit("scan", lidar.scan(self._backend, step * dt))
+                    emit("scan", lidar.scan(backend, step * dt))
             if cameras.every and (step % cameras.every == 0 or cameras.in_flight):
                 cameras.capture(step)
             if odometry:
                 for odo in odometry.values():
-                    odo.update(self._backend, step * dt)
-            emit("step", self)
+                    odo.update(backend, step * dt)
+            events.emit_step(self, step)
 
     def _apply_wrenches(self) -> None:
         """Apply the forces and torques queued since the last step (they last one step)."""

@@ -115,7 +115,8 @@ def test_a_wheel_against_a_wall_is_an_event(make_world, simulate) -> None:
 
 def test_contacts_are_read_only_while_someone_listens(make_world, backend_name: str) -> None:
     """With no on_collision controller and no collision observer, stepping never asks the backend for contacts
-    (the step loop stays cheap); once an observer listens, it asks once per step."""
+    (the step loop stays cheap); once an observer listens, it asks at most once per step (MuJoCo's compiled loop
+    only when they changed) and the event is there."""
     base = plugins.get_backend(backend_name)
 
     class Counting(base):  # type: ignore[misc, valid-type]
@@ -130,4 +131,4 @@ def test_contacts_are_read_only_while_someone_listens(make_world, backend_name: 
     assert Counting.calls == 0
     events = _listen(sim)
     sim.step(20)
-    assert Counting.calls == 20 and len(events) == 1
+    assert 1 <= Counting.calls <= 20 and len(events) == 1

@@ -132,6 +132,24 @@ def test_newer_request_supersedes_a_move(arm6_sim: Simulation) -> None:
     assert done is not None and not done["success"] and "newer target" in done["message"]
 
 
+def test_the_ik_feature_takes_steps_only_while_it_drives_a_move(arm6_sim: Simulation) -> None:
+    """Before any move and once a move settled (and holds no torque) the feature's step subscription is paused
+    (every=0: the core may batch steps); a move makes it every step again; the arm stays where the move left it."""
+    sim = arm6_sim
+    (sub,) = [s for s in sim.events.subscriptions("step") if getattr(s.fn, "__qualname__", "") == "IkFeature._on_step"]
+    assert sub.every == 0
+    from sigcore.api.call import call
+
+    pending = call(sim, _entry(sim, "_ik_solve"), "arm_0", {"x": 0.4, "y": 0.2, "z": 0.5, "move": True})
+    assert pending is not None and sub.every == 1
+    res = call_and_wait(sim, _entry(sim, "_ik_solve"), "arm_0", {"x": 0.4, "y": 0.2, "z": 0.5, "move": True})
+    assert res["success"], res["message"]
+    sim.step(2000)
+    assert sub.every == 0  # settled, nothing held: the servos keep the arm where it is
+    hand = sim.backend.get_pose("arm_0", "tool0")[0]
+    assert np.linalg.norm(hand - [0.4, 0.2, 0.5]) <= 5e-3
+
+
 @pytest.mark.parametrize(("attributes", "column", "expected"), [
     ('agent="arm_0" speed="2"', 35, "unknown attribute of plugin 'ik'; valid: name, agent, max_joint_speed"),
     ('agent="man_0"', 21, "'man_0' is not a robot of the world; robots: arm_0"),

@@ -4,7 +4,8 @@ Runtime techniques (each verified against MuJoCo 4.0 in ``tests/backends/test_mu
 
 * **Step cost.** :meth:`MujocoBackend.step` is ``mj_step`` plus a counter increment; only when an entity is
   held or a wrench/torque was applied does it run a vectorised post-step (restore held ``qpos``, zero their
-  ``qvel``, clear ``xfrc_applied``/``qfrc_applied``).
+  ``qvel``, clear ``xfrc_applied``/``qfrc_applied``). :meth:`MujocoBackend.step_batch` takes many such steps in
+  one call to a compiled loop (:mod:`.steps`), the same bit for bit.
 * **Fresh kinematics on read.** After ``mj_step``, ``xpos`` & co. describe the state *before* the integration.
   The first read after a step or a state write runs ``mj_kinematics``, ``mj_comPos`` and ``mj_comVel`` once,
   so poses, velocities and rays match ``qpos``/``qvel`` exactly. The next ``mj_step`` recomputes all of it, so
@@ -51,12 +52,14 @@ from .plan import EntityPlan, WeldPlan
 from .rays import RayCaster
 from .recompile import compile_world
 from .state import MujocoState
+from .steps import HeldArrays, compiled
 
 log = logging.getLogger("sigcore.backend.mujoco")
 
 STABILITY_CHECK_MASK = 255
 """MuJoCo's bad-acceleration warning counter is read when ``step & STABILITY_CHECK_MASK == 0`` (every 256 steps,
 0.5 s at the default timestep: reading it every step would cost 1 % of the step)."""
+STABILITY_SHIFT = (STABILITY_CHECK_MASK + 1).bit_length() - 1
 
 
 class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
@@ -115,6 +118,10 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
         self._unstable = 0
         self._synced = -1
         self._contacts_tick = -1
+        self._read_tick = -1
+        self._loop = compiled()
+        self.batches = self._loop is not None
+        self._held_c: HeldArrays | None = None
         self._contacts: frozenset[tuple[int, int]] = frozenset()
         self._applied = False
         self._held = {e.name for e in self._entities.values() if e.held0}
@@ -130,6 +137,24 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
             self._check_stability()
         if self._post:
             self._after_step()
+
+    def step_batch(self, n: int, contacts: bool) -> int:
+        """Take up to ``n`` steps in one call to the compiled loop (:mod:`.steps`), each one what :meth:`step` does;
+        with ``contacts``, stop after the first step whose contacts differ from those before. One :meth:`step`
+        instead when there is no compiled loop, a force or torque was applied for the next step, or the current
+        contacts were not read (the comparison starts from contacts the core has seen)."""
+        loop = self._loop
+        if n <= 1 or loop is None or self._applied or (contacts and self._read_tick != self._tick):
+            self.step()
+            return 1
+        held = self._held_c
+        if held is None or held.key != (id(self._held_qpos), id(self._held_values), id(self._held_dofs)):
+            held = self._held_c = HeldArrays(self._held_qpos, self._held_values, self._held_dofs)
+        tick0 = self._tick
+        self._tick = tick = tick0 + loop.run(self.model, self.data, n, held, contacts)
+        if tick0 >> STABILITY_SHIFT != tick >> STABILITY_SHIFT:  # passed a step where step() checks
+            self._check_stability()
+        return tick - tick0
 
     def _check_stability(self) -> None:
         """Report (once per run of the model, then only counted) that MuJoCo found a NaN, infinite or huge
@@ -292,7 +317,7 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
         """Part-id pairs in contact in the last step (computed once per step, from ``data.contact``)."""
         if self._contacts_tick != self._tick:
             self._contacts = self._contact_map.pairs(self.data)
-            self._contacts_tick = self._tick
+            self._contacts_tick = self._read_tick = self._tick
         return self._contacts
 
     def part_of(self, part_id: int) -> tuple[str, str]:

@@ -61,7 +61,8 @@ class IkFeature(Feature):
         self.settings = SolverSettings()
         self.motions: dict[tuple[str, str], ArmMotion] = {}
         self.solves = 0
-        sim.events.subscribe("step", self._on_step)
+        # called while a motion is driven only (set_every): between motions the core may batch steps
+        self._stepping = sim.events.subscribe("step", self._on_step, every=0)
 
     # ------------------------------------------------------------------ solving
     def robot(self, name: str) -> RobotIk:
@@ -133,6 +134,7 @@ class IkFeature(Feature):
         motion = ArmMotion(robot, chain, angles, goal, now, duration, r.kp,
                            integral_times(r.model, chain, q_goal, r.kv), now + timeout)
         self.motions[(robot, chain.name)] = motion
+        self._stepping.set_every(1)
         target_root = r.base_pose().actInv(target_world)
         self._drive(r, motion)
 
@@ -181,9 +183,13 @@ class IkFeature(Feature):
         motion.holding = bool(np.any(torques != 0.0))
 
     def _on_step(self, sim: Simulation) -> None:
+        driven = False
         for motion in self.motions.values():
             if not motion.superseded and (not motion.settled or motion.holding):
                 self._drive(self.robots[motion.robot], motion)
+                driven = True
+        if not driven:
+            self._stepping.set_every(0)
 
     def reset(self) -> None:
         """The simulation was reset: moves in progress are answered with an error and forgotten."""

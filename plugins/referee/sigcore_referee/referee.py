@@ -68,7 +68,7 @@ class Referee(Feature):
         sim.features.register_service(cfg.service, self.on_message)
         if cfg.rules == "cleanup" or cfg.time_limit > 0:
             self._every = max(1, round(1.0 / (cfg.rate * sim.dt)))
-            sim.events.subscribe("step", self._on_step)
+            sim.events.subscribe("step", self._on_step, every=self._every)
         self.topics = RefereeTopics(self)
 
     def _cleanup_rules(self) -> None:
