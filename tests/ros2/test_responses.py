@@ -1,6 +1,6 @@
-"""Service responses, and simulate_steps' result responses, whose client's response reader is not matched (yet) are
-kept and sent again, not dropped silently by rmw (the transport runs in this process, the client in another; see
-sigcore_ros2/responses.py and sigcore_ros2/action.py)."""
+"""Service responses, and simulate_steps' goal and result responses, whose client's response reader is not matched
+(yet) are kept and sent again, not dropped silently by rmw (the transport runs in this process, the client in another;
+see sigcore_ros2/responses.py and sigcore_ros2/action.py)."""
 
 from __future__ import annotations
 
@@ -79,22 +79,27 @@ def _dropped(caplog: pytest.LogCaptureFixture, says: str = "a response was dropp
     return [r.getMessage() for r in caplog.records if says in r.getMessage()]
 
 
-def test_an_undeliverable_action_result_is_tried_again_then_dropped_with_a_warning(
-        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture) -> None:
-    """A simulate_steps client whose get_result response reader never matches (incompatible durability, a real rmw
-    failure on each send): its goal is accepted and its 5 steps are taken, and the result response is tried again
-    (more than one try), then dropped after GIVE_UP with a warning naming the action; the simulation thread is never
-    blocked by it for more than 1 s (stated margin: the tries run on the action node's executor thread)."""
+@pytest.mark.parametrize("unmatched, accepted", [("result", True), ("goal", None)])
+def test_an_undeliverable_action_response_is_tried_again_then_dropped_with_a_warning(
+        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture, unmatched: str, accepted: bool | None) -> None:
+    """A simulate_steps client one of whose response readers never matches (incompatible durability, a real rmw
+    failure on each send): of get_result (its goal is accepted, its result cannot be delivered), or of send_goal
+    (what a client that sent its goal before the simulator discovered it meets for a while, here for good: the goal
+    arrives and is accepted, the acceptance cannot be delivered). The response is tried again (more than one try),
+    then dropped after GIVE_UP with a warning naming the action and the response; the goal takes its 5 steps either
+    way (its client asked for them); the simulation thread is never blocked by the tries for more than 1 s (stated
+    margin: they run on the action node's executor thread)."""
     from sigcore_ros2 import responses
 
     monkeypatch.setattr(responses, "GIVE_UP", 1.0)
     sim, transport, env = start_in_process(monkeypatch, WORLD)
+    says = f"a {unmatched} response was dropped"
     longest = 0.0
     try:
         with caplog.at_level(logging.WARNING, logger="sigcore.ros2"):
-            with client_process(env, "unmatched_result.py", stdin=True) as proc:
+            with client_process(env, "unmatched_result.py", unmatched, stdin=True) as proc:
                 end = time.monotonic() + 120.0  # a bound only: discovery on a loaded machine
-                while not _dropped(caplog, "a result response was dropped") and time.monotonic() < end \
+                while (not _dropped(caplog, says) or sim.step_count < 5) and time.monotonic() < end \
                         and proc.poll() is None:
                     t = time.monotonic()  # this thread is the simulation thread
                     transport.service(0.05)
@@ -107,9 +112,9 @@ def test_an_undeliverable_action_result_is_tried_again_then_dropped_with_a_warni
         transport.stop()
     assert proc.returncode == 0, err[-3000:]
     result = last_json(out)
-    assert result == {"accepted": True, "result": False}, result  # the case is real
+    assert result == {"accepted": accepted, "result": False}, result  # the case is real
     assert sim.step_count == 5  # the goal ran
-    dropped = _dropped(caplog, "a result response was dropped")
+    dropped = _dropped(caplog, says)
     assert len(dropped) == 1 and dropped[0].startswith("/simulate_steps: "), dropped
     tries = int(dropped[0].split(" tries")[0].rsplit("(", 1)[1])
     assert tries >= 2, dropped  # tried again, not dropped at once

@@ -164,14 +164,48 @@ class SimulateStepsAction:
 
 @functools.cache
 def _patient(base: type) -> type:
-    """``rclpy.action.ActionServer`` whose result responses wait for their client, as :mod:`.responses` does for
-    services: rclpy sends a ``get_result`` response once, and rmw drops it when the client's response reader is not
-    discovered yet (on a loaded machine a client calls ``get_result`` right after its goal was accepted, or before any
-    goal, seconds before that); the client then waits for its result forever. Here a send that fails is tried again
-    every :data:`~.responses.RETRY_PERIOD` until :data:`~.responses.GIVE_UP` (then a warning names the action). The
-    tries block one of the action node's executor threads (:data:`FREE_THREADS` are never held by goals)."""
+    """``rclpy.action.ActionServer`` whose goal and result responses wait for their client, as :mod:`.responses`
+    does for services: rclpy sends each response once, and rmw drops it when the client's response reader is not
+    discovered yet. On a loaded machine a client sends its goal right after it found the server, and calls
+    ``get_result`` right after its goal was accepted, seconds before the server has matched the reader that would
+    receive the answer; the client then waits for its acceptance, or its result, forever. Here a send that fails is
+    tried again every :data:`~.responses.RETRY_PERIOD` until :data:`~.responses.GIVE_UP` (then a warning names the
+    action and the response). The tries block one of the action node's executor threads (:data:`FREE_THREADS` are
+    never held by goals).
+
+    An accepted goal runs even if its acceptance could not be delivered: its client asked for it, its result can
+    still be asked for, and the goal callback's bookkeeping (one running goal more) is always undone by its end."""
 
     class PatientActionServer(base):  # type: ignore[valid-type,misc]
+        async def _execute_goal_request(self, request_header_and_message: Any) -> None:
+            from action_msgs.msg import GoalInfo
+            from rclpy.action.server import GoalResponse, ServerGoalHandle
+            from rclpy.executors import await_or_execute
+            from rclpy.task import Future
+
+            header, request = request_header_and_message
+            info = GoalInfo(goal_id=request.goal_id)
+            key = bytes(request.goal_id.uuid)
+            with self._lock:
+                known = self._handle.goal_exists(info)  # the same goal id twice: refused
+            handle = None
+            if not known and await await_or_execute(self._goal_callback, request.goal) == GoalResponse.ACCEPT:
+                info.stamp = self._node.get_clock().now().to_msg()
+                try:
+                    with self._lock:
+                        handle = ServerGoalHandle(self, info, request.goal)
+                except RuntimeError as e:  # rcl could not take the goal (e.g. the server is being destroyed)
+                    log.warning("%s: an accepted goal could not be started: %s", self.sigcore_name, clip(str(e), 200))
+                else:
+                    self._goal_handles[key] = handle
+                    self._result_futures[key] = Future()
+                    self.add_future(self._result_futures[key])
+            response = self._action_type.Impl.SendGoalService.Response(accepted=handle is not None, stamp=info.stamp)
+            self.send_patiently("goal", lambda: self._handle.send_goal_response(header, response))
+            if handle is not None:
+                self._handle.publish_status()
+                await await_or_execute(self._handle_accepted_callback, handle)
+
         async def _execute_get_result_request(self, request_header_and_message: Any) -> None:
             header, request = request_header_and_message
             future = self._result_futures.get(bytes(request.goal_id.uuid))
@@ -188,22 +222,26 @@ def _patient(base: type) -> type:
             self.send_result_patiently(request_header, future.result())
 
         def send_result_patiently(self, header: Any, response: Any) -> bool:
-            """Send a ``get_result`` response; try again while rmw cannot deliver it. Whether it went out."""
+            """Send a ``get_result`` response, trying again while rmw cannot deliver it. Whether it went out."""
+            return self.send_patiently("result", lambda: self._handle.send_result_response(header, response))
+
+        def send_patiently(self, what: str, send: Any) -> bool:
+            """Call ``send`` (of the ``what`` response); again while rmw cannot deliver it. Whether it went out."""
             from rclpy.impl.implementation_singleton import rclpy_implementation
 
             first, tries = time.monotonic(), 0
             while True:
                 tries += 1
                 try:
-                    if responses.delivered(lambda: self._handle.send_result_response(header, response)):
+                    if responses.delivered(send):
                         return True
                 except rclpy_implementation.RCLError as e:  # e.g. the server is being destroyed: nobody to wait for
-                    log.debug("%s: a result response was not sent (%s)", self.sigcore_name, clip(str(e), 200))
+                    log.debug("%s: a %s response was not sent (%s)", self.sigcore_name, what, clip(str(e), 200))
                     return False
                 if time.monotonic() - first >= responses.GIVE_UP:
-                    log.warning("%s: a result response was dropped: the client's response reader was not discovered "
-                                "within %g s (%d tries); the client waits in vain", self.sigcore_name,
-                                responses.GIVE_UP, tries, extra=log_key(self.sigcore_name, "unsent result"))
+                    log.warning("%s: a %s response was dropped: the client's response reader was not discovered "
+                                "within %g s (%d tries); the client waits in vain", self.sigcore_name, what,
+                                responses.GIVE_UP, tries, extra=log_key(self.sigcore_name, f"unsent {what}"))
                     return False
                 time.sleep(responses.RETRY_PERIOD)
 
