@@ -84,11 +84,11 @@ def test_an_undeliverable_action_response_is_tried_again_then_dropped_with_a_war
         monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture, unmatched: str, accepted: bool | None) -> None:
     """A simulate_steps client one of whose response readers never matches (incompatible durability, a real rmw
     failure on each send): of get_result (its goal is accepted, its result cannot be delivered), or of send_goal
-    (what a client that sent its goal before the simulator discovered it meets for a while, here for good: the goal
-    arrives and is accepted, the acceptance cannot be delivered). The response is tried again (more than one try),
-    then dropped after GIVE_UP with a warning naming the action and the response; the goal takes its 5 steps either
-    way (its client asked for them); the simulation thread is never blocked by the tries for more than 1 s (stated
-    margin: they run on the action node's executor thread)."""
+    (what a client that sent its goal before the simulator discovered it meets for a while, here for good: the
+    goal arrives and is accepted, the acceptance cannot be delivered). The response is tried again (more than one
+    try), then dropped after GIVE_UP with a warning naming the action and the response; the goal takes its 5 steps
+    either way (its client asked for them); the simulation thread is never blocked by the tries for more than 1 s
+    (stated margin: they run on the action node's executor thread)."""
     from sigcore_ros2 import responses
 
     monkeypatch.setattr(responses, "GIVE_UP", 1.0)
