@@ -81,7 +81,8 @@ def _dropped(caplog: pytest.LogCaptureFixture, says: str = "a response was dropp
 
 @pytest.mark.parametrize("unmatched, accepted", [("result", True), ("goal", None)])
 def test_an_undeliverable_action_response_is_tried_again_then_dropped_with_a_warning(
-        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture, unmatched: str, accepted: bool | None) -> None:
+        monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture, unmatched: str,
+        accepted: bool | None) -> None:
     """A simulate_steps client one of whose response readers never matches (incompatible durability, a real rmw
     failure on each send): of get_result (its goal is accepted, its result cannot be delivered), or of send_goal
     (what a client that sent its goal before the simulator discovered it meets for a while, here for good: the
