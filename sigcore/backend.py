@@ -4,9 +4,12 @@ Conventions, for every method:
 
 * SI units, world frame z up; quaternions are ``(w, x, y, z)``; vectors are ``numpy`` float arrays of shape (3,).
 * Entities are the world's robots, objects and humans, by name. Parts are rigid bodies of an entity: a robot's URDF
-  link names; an object or human has the single part ``"main"``. ``part=None`` means the entity's main part (a
-  robot's root link).
-* Joints are a robot's movable (1-DoF) URDF joints, by name.
+  link names, a person's links (its generated URDF, :mod:`sigcore.world.body`: root ``"main"`` at the feet, then
+  REP-155's ``body``, ``head``, ``l_wrist``, ...); an object has the single part ``"main"``. ``part=None`` means
+  the entity's main part (a robot's root link, a person's feet).
+* Joints are a robot's or a person's movable (1-DoF) URDF joints, by name. A person's joints have no motor: they
+  stay where ``set_joint_angle`` puts them (target, velocity and torque commands are refused); a static person
+  (the default) is held whole, a dynamic one has a free root and held joints (a mannequin).
 * The core validates names and values before calling; a backend may assume names exist and numbers are finite.
 * Nothing here advances time except :meth:`Backend.step`. The core owns the simulation clock.
 """
@@ -79,6 +82,31 @@ def collision_urdf(urdf: UrdfDocument, what: str,
         raise BackendError(f"{what}: the root link of {path} is 'world'; remove the 'world' link and its "
                            "joint, and set fixed=\"true\" on the <robot> to weld the robot to the world")
     return root, roots
+
+
+def entity_urdf(world: World, entity: str, what: str, tree: bool = True) -> UrdfDocument:
+    """The world's shared URDF of ``entity`` (a robot, a person, a URDF object), its link and joint tree checked
+    too when ``tree``.
+
+    Raises:
+        BackendError: the file cannot be read, or (``tree``) its links and joints are not one tree; the message
+            starts with ``what`` (the entity, e.g. ``"robot 'robot_000'"``).
+    """
+    from .world.exceptions import UrdfError
+
+    try:
+        document = world.urdf(entity)
+        if tree:
+            document.model  # noqa: B018 - parsed and checked now, so that a bad tree names the entity
+    except UrdfError as e:
+        raise BackendError(f"{what}: {e}") from None
+    return document
+
+
+def passive_joint(entity: str, joint: str) -> str:
+    """The refusal of a motor command (target, velocity, torque) to a person's joint, which has no motor."""
+    return (f"joint '{joint}' of human '{entity}' has no motor: a person's joints are moved kinematically, by "
+            "set_joint_angle (or by its motion: a gait, a skeleton stream)")
 
 
 def find_entity(entities: Mapping[str, T], name: str) -> T:

@@ -1,11 +1,12 @@
 """The scene description: every entity's visual geometry and colour, built once per simulation (``sim.scene``).
 
-Made from the world file (primitive and mesh objects, humans) and the URDFs' ``<visual>`` elements (robots and
-URDF objects; :mod:`sigcore.world.visuals`). Each visual is attached to a TF frame:
+Made from the world file (primitive and mesh objects) and the URDFs' ``<visual>`` elements (robots, people's
+generated URDFs and URDF objects; :mod:`sigcore.world.visuals`). Each visual is attached to a TF frame:
 
 * a robot's visuals to its link frames, named by the core (:meth:`sigcore.sim.frames.Frames.name`: the URDF's link
   names, prefixed ``<robot>/`` when the world has several robots);
-* an object's or a human's to the frame named after the entity (``can_0``), whose pose is
+* a person's to its link frames (``head_man_0``; its feet: ``man_0``), named by the core the same way;
+* an object's to the frame named after the entity (``can_0``), whose pose is
   ``backend.get_pose(entity)``. A URDF object's visuals of every link are expressed in that frame (its root
   link's), composing the joints' ``<origin>`` from the URDF: fixed joints as they are, a movable joint at its zero
   position (the object URDFs sigcore ships have fixed joints only); the world file's ``scale`` scales them.
@@ -25,7 +26,7 @@ import numpy as np
 
 from .geometry import quat_rotate
 from .world.appearance import EntityScene, FrameName, entity_scene, visual_corners
-from .world.models import Entity, Robot, World
+from .world.models import Entity, Human, Robot, World
 
 if TYPE_CHECKING:
     from .backend import Backend
@@ -57,7 +58,7 @@ class Scene:
         self._parts: dict[str, dict[str, str | None]] = {}
         """entity -> frame -> the part whose pose the backend gives for it (a robot's root link: None)."""
         for e in world.entities:
-            if isinstance(e, Robot):
+            if isinstance(e, Robot | Human):
                 urdf = world.urdf(e.name).model
                 self._parts[e.name] = {frame(e.name, link): (None if link == urdf.root else link)
                                        for link in urdf.links}
@@ -67,7 +68,7 @@ class Scene:
         """Entities spawned while running (then :meth:`changed`)."""
         for e in entities:
             self.entities[e.name] = entity_scene(world, e, frame)
-            if isinstance(e, Robot):
+            if isinstance(e, Robot | Human):
                 urdf = world.urdf(e.name).model
                 self._parts[e.name] = {frame(e.name, link): (None if link == urdf.root else link)
                                        for link in urdf.links}
@@ -79,8 +80,8 @@ class Scene:
             self._parts.pop(name, None)
 
     def frame_parts(self, name: str) -> dict[str, str | None]:
-        """Every frame of entity ``name`` -> the part whose pose the backend gives for it: a robot's link frames
-        (its root link: None), an object's or a human's own frame (None). ``backend.get_pose(name, part)`` is the
+        """Every frame of entity ``name`` -> the part whose pose the backend gives for it: a robot's or a person's
+        link frames (its root link: None), an object's own frame (None). ``backend.get_pose(name, part)`` is the
         frame's pose in ``world``."""
         return dict(self._parts.get(name, {name: None}))
 

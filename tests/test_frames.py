@@ -28,6 +28,7 @@ def _parents(sim: Simulation, robot: str) -> dict[str, tuple[str, np.ndarray, np
     static = sim.frames.static()
     tree = {child: (parent, np.array(xyz), np.array(wxyz)) for child, (parent, xyz, wxyz) in static.items()}
     dynamic = sim.frames.transforms(robot) + sim.frames.entity_transforms()
+    dynamic += [t for person in sim.frames.people for t in sim.frames.transforms(person)]
     if sim.frames.root_mode(robot) == "odom":
         pos, quat = sim.backend.get_pose(robot)
         dynamic.append((WORLD, sim.entities.urdf(robot).root, tuple(pos), tuple(quat)))
@@ -76,6 +77,14 @@ def test_composed_link_poses_equal_the_backend_poses(world: str, backend: str) -
         assert min(np.abs(quat - bquat).max(), np.abs(quat + bquat).max()) < 1e-6, link
     for entity in sim.frames.entities:
         assert np.abs(_in_world(tree, entity)[0] - sim.backend.get_pose(entity)[0]).max() < 1e-12
+    for person in sim.frames.people:  # a person's REP-155 link frames, joints moved, equal its backend links
+        _move_joints(sim, person)
+        tree = _parents(sim, robot)
+        for link in sim.entities.urdf(person).links:
+            pos, quat = _in_world(tree, sim.frames.name(person, link))
+            bpos, bquat = sim.backend.get_pose(person, link)
+            assert np.abs(pos - bpos).max() < 1e-6, link
+            assert min(np.abs(quat - bquat).max(), np.abs(quat + bquat).max()) < 1e-6, link
 
 
 def test_the_roots_of_robots_with_a_drive_fixed_and_free() -> None:
@@ -106,9 +115,15 @@ def test_transforms_take_the_published_joint_positions() -> None:
     assert sim.frames.transforms("robot_000", positions) == sim.frames.transforms("robot_000")
 
 
-def test_entity_frames_are_objects_and_humans_at_their_poses(sim: Simulation) -> None:
-    """Every object and human is a frame 'world -> <name>' at the backend's pose; robots and bare agents are not."""
-    names = [a.name for a in sim.world.agents if a.kind in ("object", "human")]
+def test_entity_frames_are_objects_at_their_poses(sim: Simulation) -> None:
+    """Every object is a frame 'world -> <name>' at the backend's pose; robots, people (whose link frames are
+    computed like a free robot's) and bare agents are not."""
+    names = [a.name for a in sim.world.agents if a.kind == "object"]
+    people = [a.name for a in sim.world.agents if a.kind == "human"]
+    assert people and list(sim.frames.people) == people
+    assert sim.frames.moving(people[0])[0] == (WORLD, people[0])  # its feet, at the backend's pose
+    assert (f"body_{people[0]}", f"l_y_hip_{people[0]}") in sim.frames.moving(people[0])
+    assert sim.frames.static()[f"body_{people[0]}"][0] == people[0]  # the pelvis fixed above the feet
     transforms = sim.frames.entity_transforms()
     assert list(sim.frames.entities) == names == [child for _, child, _, _ in transforms]
     for parent, child, xyz, wxyz in transforms:

@@ -13,7 +13,7 @@ from lxml import etree
 from sigcore.sim import Simulation
 from sigcore.sim.description import CUBE, CYLINDER, DELETEALL, MESH_RESOURCE, SPHERE, robot_description
 from sigcore.world import World, parse_world
-from sigcore.world.appearance import HUMAN_COLOR, human_dimensions
+from sigcore.world.body import SKIN
 from sigcore.world.visuals import mesh_vertex_bounds
 
 ROOT = Path(__file__).parent.parent
@@ -122,14 +122,22 @@ def test_urdf_object_visuals_are_in_the_entity_frame(cleanup_sim: Simulation) ->
     assert {v.color for v in table.visuals} == {(0.6, 0.42, 0.25, 1.0)}
 
 
-def test_human_is_the_backends_capsule_and_head(cleanup_sim: Simulation) -> None:
-    """A human is a capsule standing on its feet and a head sphere reaching its height, in its own frame."""
-    capsule, head = cleanup_sim.scene.entities["man_0"].visuals
-    r_body, r_head, top = human_dimensions(1.7)
-    assert (capsule.frame, capsule.shape, head.shape) == ("man_0", "capsule", "sphere")
-    assert capsule.size == pytest.approx((r_body, top - 2 * r_body))
-    assert capsule.xyz[2] - capsule.size[1] / 2 - r_body == pytest.approx(0.0)  # bottom on the feet
-    assert head.xyz[2] + head.size[0] == pytest.approx(1.7) and capsule.color == head.color == HUMAN_COLOR
+def test_a_person_is_drawn_by_its_links(cleanup_sim: Simulation) -> None:
+    """A person's visuals hang on its REP-155 link frames (``head_man_0``...), capsules and spheres from its
+    generated URDF; the head sphere reaches its height when the frames are at their standing poses."""
+    person = cleanup_sim.scene.entities["man_0"]
+    frames = {v.frame for v in person.visuals}
+    assert person.kind == "human" and {"body_man_0", "torso_man_0", "head_man_0", "l_knee_man_0",
+                                       "r_wrist_man_0"} <= frames
+    assert {v.shape for v in person.visuals} == {"capsule", "sphere", "box"}
+    head = next(v for v in person.visuals if v.frame == "head_man_0")
+    assert head.shape == "sphere" and head.color == SKIN
+    parts = cleanup_sim.scene.frame_parts("man_0")
+    assert parts["man_0"] is None and parts["head_man_0"] == "head"
+    pos, quat = cleanup_sim.backend.get_pose("man_0", "head")
+    assert pos[2] + head.xyz[2] + head.size[0] == pytest.approx(1.7, abs=1e-6)
+    lo, hi = cleanup_sim.scene.bounds("man_0")
+    assert hi[2] == pytest.approx(1.7, abs=1e-6) and lo[2] == pytest.approx(0.0, abs=1e-6)
 
 
 def test_urdf_object_composes_fixed_joints_and_scale(tmp_path: Path) -> None:
@@ -273,7 +281,9 @@ def test_scene_markers_carry_the_world_files_sizes_and_colours(cleanup: World) -
     (wall, ) = by_ns["wall_north"]
     assert wall["type"] == CUBE and wall["scale"] == {"x": 10.2, "y": 0.1, "z": 1.0}
     assert [m["type"] for m in by_ns["table_0"]] == [CUBE] * 5
-    assert [m["type"] for m in by_ns["man_0"]] == [CYLINDER, SPHERE, SPHERE, SPHERE]
+    person = [m["type"] for m in by_ns["man_0"]]  # 10 capsules (a cylinder and two spheres), head, hands, feet
+    assert (person.count(CYLINDER), person.count(SPHERE), person.count(CUBE), len(person)) == (10, 23, 2, 35)
+    assert "head_man_0" in {m["header"]["frame_id"] for m in by_ns["man_0"]}
     assert len(by_ns["robot_000"]) == 26 and by_ns["robot_000"][0]["header"]["frame_id"] == "base_link"
 
 

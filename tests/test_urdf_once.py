@@ -146,10 +146,12 @@ def test_world_built_without_parser_loads_a_urdf_on_first_use(count_urdf: Any) -
 def test_world_urdf_names_the_agents_that_have_one() -> None:
     """Asking for the URDF of an agent without one (or of no agent) names the agents that have a URDF."""
     world = parse_world(CLEANUP)
-    known = "robot_000, table_0, table_1, wagon, trashbox_0, trashbox_1, trashbox_2"
+    known = "robot_000, table_0, table_1, wagon, trashbox_0, trashbox_1, trashbox_2, man_0"
     with pytest.raises(KeyError) as no_urdf:
-        world.urdf("man_0")
-    assert no_urdf.value.args[0] == f"agent 'man_0' has no URDF; agents with one: {known}"
+        world.urdf("wall_north")
+    assert no_urdf.value.args[0] == f"agent 'wall_north' has no URDF; agents with one: {known}"
+    person = world.urdf("man_0")  # a person's URDF is generated, once per height and mass
+    assert person.model.root == "main" and "l_knee" in person.model.links and world.urdf("man_0") is person
     with pytest.raises(KeyError) as no_agent:
         world.urdf("nobody")
     assert no_agent.value.args[0] == f"no agent 'nobody'; agents with a URDF: {known}"

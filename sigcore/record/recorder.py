@@ -279,8 +279,9 @@ def world_files(world: Any) -> dict[Path, str]:
 
 def truth_frame(entity: str, frame: str, robot: bool) -> str:
     """The ground truth's child frame of ``frame`` of ``entity``: ``ground_truth/<robot>/<frame>`` for each frame of
-    a robot, ``ground_truth/<entity>`` for an object's or a human's one frame."""
-    return GROUND_TRUTH_PREFIX + (f"{entity}/{frame}" if robot else entity)
+    a robot or a person (``robot`` true; a person's feet, the frame named after it: ``ground_truth/<person>``),
+    ``ground_truth/<entity>`` for an object's one frame."""
+    return GROUND_TRUTH_PREFIX + (f"{entity}/{frame}" if robot and frame != entity else entity)
 
 
 def truth_frames(sim: Simulation) -> tuple[list[tuple[str, str | None]], list[str]]:
@@ -288,7 +289,7 @@ def truth_frames(sim: Simulation) -> tuple[list[tuple[str, str | None]], list[st
     parts: list[tuple[str, str | None]] = []
     names: list[str] = []
     for entity in sim.scene.entities:
-        robot = entity in sim.entities and sim.entities[entity].kind == "robot"
+        robot = entity in sim.entities and sim.entities[entity].kind in ("robot", "human")  # with link frames
         for frame, part in sim.scene.frame_parts(entity).items():
             parts.append((entity, part))
             names.append(truth_frame(entity, frame, robot))

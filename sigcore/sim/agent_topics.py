@@ -81,14 +81,13 @@ class AgentTopics:
             source.attach(self._sim, publishers)
 
     def add(self, robots: Iterable[str]) -> None:
-        """Robots were added: their ``robot_description`` (under their namespace)."""
+        """Robots or people were added: their ``robot_description`` (under their namespace)."""
         for robot in robots:
             self._description.add(robot, self._sim.entities.namespace(robot))
 
-    def remove(self, name: str, robot: bool) -> None:
-        """Agent ``name`` was removed: its topics are withdrawn, its ``robot_description`` if it is a robot."""
-        if robot:
-            self._description.remove(name)
+    def remove(self, name: str) -> None:
+        """Agent ``name`` was removed: its topics are withdrawn, its ``robot_description`` if it has one."""
+        self._description.remove(name)
         for topic in self._topics.pop(name, []):
             self._sim.publications.withdraw(topic)
         for _, publishers, _ in self._sources:

@@ -1,8 +1,9 @@
 """Frame names and the TF tree of a world: one owner for its names, its fixed part and the computation of the rest.
 
 Frames follow REP-105: with one robot, ``odom`` and the URDF's link names (``base_link``); with several, each robot's
-frames are prefixed with ``<robot>/``. Objects and humans are frames named after the entity. The tree has one root,
-``world``:
+frames are prefixed with ``<robot>/``. Objects are frames named after the entity. A person's frames follow REP-155:
+its feet are the frame named after it, each link of its body (:mod:`sigcore.world.body`) is ``<link>_<person>``
+(``body_man_0``, ``head_man_0``, ``l_wrist_man_0``). The tree has one root, ``world``:
 
 * a robot's root link: ``world -> odom`` (static, its start pose on the ground) and ``odom -> <root>`` (the wheel
   odometry, ``sim.entities.odometry``, published by the transport) for a robot with a ``<drive>``; ``world -> <root>``
@@ -12,7 +13,9 @@ frames are prefixed with ``<robot>/``. Objects and humans are frames named after
 * every movable joint: ``parent -> child`` from the joint ``<origin>``, ``<axis>`` and the joint's position, as
   robot_state_publisher computes it (:meth:`Frames.transforms`); floating and planar joints from the backend's
   link poses;
-* every object and human: ``world -> <entity>`` from the backend's pose (:meth:`Frames.entity_transforms`);
+* every person: ``world -> <person>`` from the backend's pose, its fixed joints static, its movable joints from
+  the backend's joint angles (:meth:`Frames.transforms`, as a free robot's);
+* every object: ``world -> <entity>`` from the backend's pose (:meth:`Frames.entity_transforms`);
 * every camera: ``<link> -> <camera>_link`` at the camera's pose and ``<camera>_link -> <camera>_optical_frame``
   (z forward, x right, y down), both static.
 
@@ -32,6 +35,7 @@ import numpy as np
 
 from ..geometry import quat_conj, quat_from_rpy, quat_mul, quat_rotate, quat_yaw
 from ..publish import Publication, Publisher, planar_quaternion, transform_fields
+from ..world.body import ROOT
 from ..world.exceptions import WorldError, WorldIssue
 from ..world.urdf import UrdfJoint
 
@@ -101,14 +105,17 @@ class Frames:
         self._sim = sim
         robots = [a.name for a in sim.world.agents if a.kind == "robot"]
         self._prefix = {r: (f"{r}/" if len(robots) > 1 else "") for r in robots}
+        self._people = [a.name for a in sim.world.agents if a.kind == "human"]
         self._static: dict[str, tuple[str, tuple[float, ...], tuple[float, ...]]] = {}
         self._publisher: Publisher | None = None  # declared once the constructor has filled the tree
         self._mode: dict[str, RootMode] = {}
         self._moving: dict[str, tuple[_Moving, ...]] = {}
-        self._entities = tuple(a.name for a in sim.world.agents if a.kind in ("object", "human"))
+        self._entities = tuple(a.name for a in sim.world.agents if a.kind == "object")
         self._check_entity_names(robots)
         for robot in robots:
             self._add_robot(robot)
+        for person in self._people:
+            self._add_person(person)
         self._publisher = sim.publications.declare(TF_STATIC)
         self.publish()
 
@@ -130,6 +137,10 @@ class Frames:
             self.set_static(self.name(robot, camera.link_frame), self.name(robot, camera.optical_frame),
                             (0.0, 0.0, 0.0), OPTICAL)
 
+    def _add_person(self, person: str) -> None:
+        self._mode[person] = "free"
+        self._moving[person] = self._robot_tree(person)
+
     # ------------------------------------------------------------------ run-time changes
     def taken(self) -> dict[str, str]:
         """Every frame name in use -> what it is (for refusing an entity that would reuse one)."""
@@ -142,6 +153,10 @@ class Frames:
             for camera in self._sim.entities.robot_model(robot).cameras:
                 for frame in (camera.link_frame, camera.optical_frame):
                     taken.setdefault(self.name(robot, frame), f"a frame of camera '{camera.name}' of robot '{robot}'")
+        for person in self._people:
+            for link in self._sim.entities.urdf(person).links:
+                if link != ROOT:  # the feet frame is the person's name, which is taken as an agent name
+                    taken.setdefault(self.name(person, link), f"the frame of link '{link}' of human '{person}'")
         for entity in self._entities:
             taken.setdefault(entity, f"the frame of entity '{entity}'")
         return taken
@@ -161,6 +176,9 @@ class Frames:
                 if kind == "robot":
                     self._prefix[name] = self.spawn_prefix(name)
                     self._add_robot(name)
+                elif kind == "human":
+                    self._people.append(name)
+                    self._add_person(name)
                 else:
                     self._entities = (*self._entities, name)
         finally:
@@ -180,20 +198,32 @@ class Frames:
             del self._prefix[robot]
             self._mode.pop(robot, None)
             self._moving.pop(robot, None)
+        for person in [p for p in self._people if p in gone]:
+            mine = {self.name(person, link) for link in self._sim.entities.urdf(person).links}
+            for child in [c for c in self._static if c in mine]:
+                self._static.pop(child)
+            self._people.remove(person)
+            self._mode.pop(person, None)
+            self._moving.pop(person, None)
         self._entities = tuple(e for e in self._entities if e not in gone)
         self._republish()
 
     def _check_entity_names(self, robots: list[str]) -> None:
-        """``WorldError`` at the name of each object or human whose frame name a robot's frame already has."""
+        """``WorldError`` at the name of each object or human whose frame name a robot's frame (or another person's
+        link frame) already has."""
         taken = {WORLD: "the root frame of the TF tree"}
         for robot in robots:
             for link in self._sim.entities.urdf(robot).links:
                 taken.setdefault(self.name(robot, link), f"the frame of link '{link}' of robot '{robot}'")
             taken.setdefault(self.name(robot, "odom"), f"the odometry frame of robot '{robot}'")
             taken.setdefault(self.name(robot, "map"), f"the map frame of robot '{robot}' (SLAM)")
+        for person in self._people:
+            for link in self._sim.entities.urdf(person).links:
+                if link != ROOT:
+                    taken.setdefault(self.name(person, link), f"the frame of link '{link}' of human '{person}'")
         world = self._sim.world
         issues = []
-        for entity in self._entities:
+        for entity in (*self._entities, *self._people):
             if entity in taken:
                 kind = world.agent(entity).kind
                 line, column = world.location(entity, "name")
@@ -229,8 +259,17 @@ class Frames:
         return self._prefix[robot]
 
     def name(self, robot: str, frame: str) -> str:
-        """The TF name of ``robot``'s frame ``frame`` (a link, ``odom``, ``map``)."""
-        return self._prefix[robot] + frame
+        """The TF name of ``robot``'s frame ``frame`` (a link, ``odom``, ``map``), or of a person's link (its root,
+        the feet: the person's name; any other: ``<link>_<person>``, as REP-155 names a body's frames)."""
+        prefix = self._prefix.get(robot)
+        if prefix is not None:
+            return prefix + frame
+        return robot if frame == ROOT else f"{frame}_{robot}"
+
+    @property
+    def people(self) -> tuple[str, ...]:
+        """The people, whose link transforms :meth:`transforms` computes like a free robot's."""
+        return tuple(self._people)
 
     def root_mode(self, robot: str) -> RootMode:
         """How ``robot``'s root link hangs in the tree (see :data:`RootMode`)."""
@@ -286,11 +325,11 @@ class Frames:
 
     @property
     def entities(self) -> tuple[str, ...]:
-        """The frames of the objects and humans (each named after its entity, child of ``world``)."""
+        """The frames of the objects (each named after its entity, child of ``world``)."""
         return self._entities
 
     def entity_transforms(self) -> list[Transform]:
-        """``world -> <entity>`` of every object and human (:attr:`entities` order) at the backend's pose."""
+        """``world -> <entity>`` of every object (:attr:`entities` order) at the backend's pose."""
         get_pose = self._sim.backend.get_pose
         out: list[Transform] = []
         for name in self._entities:

@@ -28,7 +28,7 @@ from ..geometry import quat_mul, quat_rotate
 from ..isolation import USER_ERRORS, describe
 from ..text import quote
 from ..world.exceptions import SpawnRefusal, WorldError, WorldIssue
-from ..world.models import AgentModel, Entity, Object, Robot, Spawnable, World
+from ..world.models import AgentModel, Entity, Human, Object, Robot, Spawnable, World
 from ..world.resources import SpawnRequest, build_model, check_pose, normalize_namespace, resource_element, unique_name
 from ..world.urdf import UrdfModel
 from .contacts import ContactTracker, rolling_parts
@@ -70,7 +70,8 @@ class Entities(Mapping[str, SimObj]):
         self._models = {a.name: a for a in world.agents}
         self._names = [e.name for e in world.entities]
         self._handles: dict[str, SimObj] = {a.name: self._handle(a) for a in world.agents}
-        self._urdfs: dict[str, UrdfModel] = {r.name: world.urdf(r.name).model for r in self._robots(world.agents)}
+        self._urdfs: dict[str, UrdfModel] = {a.name: world.urdf(a.name).model for a in world.agents
+                                             if isinstance(a, Robot | Human)}
         self._drives = {r.name: DriveState(r.name, r.drive) for r in self._robots(world.agents)
                         if r.drive is not None}
         self._graspable = [o.name for o in world.agents if isinstance(o, Object) and o.graspable]
@@ -157,7 +158,8 @@ class Entities(Mapping[str, SimObj]):
         return model
 
     def urdf(self, robot: str) -> UrdfModel:
-        """The URDF names of robot ``robot`` (of the world's shared document, ``World.urdf``)."""
+        """The URDF names of robot or person ``robot`` (of the world's shared document, ``World.urdf``; a person's is
+        generated)."""
         return self._urdfs[robot]
 
     def drive(self, robot: str) -> DriveState:
@@ -342,8 +344,9 @@ class Entities(Mapping[str, SimObj]):
             self._names.append(model.name)
             self._spawned[model.name] = namespaces.get(model.name, "")
             self._handles[model.name] = self._handle(model)
-            if isinstance(model, Robot):
+            if isinstance(model, Robot | Human):
                 self._urdfs[model.name] = world.urdf(model.name).model
+            if isinstance(model, Robot):
                 if model.drive is not None:
                     self._drives[model.name] = DriveState(model.name, model.drive)
                 lidars.extend(LidarSensor(model.name, lidar, world.timestep, world.seed + len(lidars) + i)

@@ -25,7 +25,7 @@ from ..backend import Array, Backend
 from ..publish import Publications
 from ..scene import Scene
 from ..text import quote
-from ..world.models import Entity, Robot, World
+from ..world.models import Entity, Human, Robot, World
 from .agent_topics import AgentTopics
 from .batching import free_steps
 from .camera import Cameras
@@ -216,7 +216,7 @@ class Simulation:
             if isinstance(model, Robot) and model.cameras:
                 self._cameras.add(model.name, model.cameras, namespace(model.name))
         self._scene.add(self.world, models, self._frames.name)
-        self._topics.add(m.name for m in models if isinstance(m, Robot))
+        self._topics.add(m.name for m in models if isinstance(m, Robot | Human))
         self._topics.declare([m.name for m in models])
 
     def _removed(self, names: Sequence[str]) -> None:
@@ -224,7 +224,7 @@ class Simulation:
         self._frames.remove(names)
         self._scene.remove(names)
         for name in names:
-            self._topics.remove(name, self._entities.is_robot(name))
+            self._topics.remove(name)
         gone = set(names)
         self._wrench = {k: v for k, v in self._wrench.items() if k[0] not in gone}
         self._outbox = [m for m in self._outbox if m.to not in gone]

@@ -1,8 +1,9 @@
 """How each entity of a world looks: its visuals and colours in its own frames, made from the world file (primitive
-and mesh objects, humans) and the URDFs' ``<visual>`` elements (:mod:`sigcore.world.visuals`), with no engine.
+and mesh objects) and the URDFs' ``<visual>`` elements (:mod:`sigcore.world.visuals`; a person's URDF is generated
+by :mod:`sigcore.world.body`), with no engine.
 
 The scene description (:class:`sigcore.scene.Scene`) holds these for a running simulation; the footprints
-(:mod:`sigcore.world.footprints`) and both backends' builders (a human's shape, the link colours) read them here.
+(:mod:`sigcore.world.footprints`) and both backends' builders (the link colours) read them here.
 """
 
 from __future__ import annotations
@@ -17,20 +18,7 @@ from ..geometry import quat_mul, quat_rotate, quat_to_matrix
 from .models import Entity, Human, Object, Robot, World
 from .visuals import Visual, mesh_vertex_bounds, origin, urdf_visuals
 
-HUMAN_COLOR: tuple[float, float, float, float] = (0.9, 0.7, 0.55, 1.0)
-"""The colour of a human's capsule and head (the backends paint them alike)."""
-
 _IDENTITY: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
-
-
-def human_dimensions(height: float) -> tuple[float, float, float]:
-    """``(body radius, head radius, top of the body capsule)`` [m] of a standing person ``height`` [m] tall.
-
-    The one owner of a human's shape (both backends build it from this). The body capsule stands on the feet
-    (z = 0 in the human's frame) and reaches ``top``; the head sphere touches its top and reaches ``height``.
-    """
-    body, head = 0.09 * height, 0.065 * height
-    return body, head, height - 2 * head
 
 
 @dataclass(frozen=True)
@@ -54,16 +42,11 @@ FrameName = Callable[[str, str], str]
 
 def entity_scene(world: World, entity: Entity, frame: FrameName) -> EntityScene:
     """The visuals of ``entity`` of ``world``; a robot's link frames are named by ``frame``."""
-    if isinstance(entity, Robot):
+    if isinstance(entity, Robot | Human):  # a person's URDF is generated (sigcore.world.body)
         document = world.urdf(entity.name)
         visuals = tuple(replace(v, frame=frame(entity.name, v.frame))
                         for v in urdf_visuals(document.root, document.path.parent))
-        return EntityScene(entity.name, "robot", visuals)
-    if isinstance(entity, Human):
-        r_body, r_head, top = human_dimensions(entity.height)
-        return EntityScene(entity.name, "human", (
-            Visual(entity.name, "capsule", (r_body, top - 2 * r_body), (0.0, 0.0, top / 2), _IDENTITY, HUMAN_COLOR),
-            Visual(entity.name, "sphere", (r_head,), (0.0, 0.0, top + r_head), _IDENTITY, HUMAN_COLOR)))
+        return EntityScene(entity.name, entity.kind, visuals)
     if entity.urdf is not None:
         return EntityScene(entity.name, "object", _urdf_object(world, entity))
     origin_ = (0.0, 0.0, 0.0)
@@ -86,7 +69,7 @@ def _given_color(entity: Entity) -> Color | None:
 
 
 def link_colors(world: World, entity: Entity) -> dict[str, Color]:
-    """The colour of each URDF link of a robot or a URDF object of ``world``, as the scene shows it.
+    """The colour of each URDF link of a robot, a person or a URDF object of ``world``, as the scene shows it.
 
     The backends drop the URDFs' ``<visual>`` elements and their cameras render the collision geometry, so they
     paint each link's collision geometry with this colour: the camera, the viewer and ``/sigcore/scene`` then show
@@ -94,10 +77,10 @@ def link_colors(world: World, entity: Entity) -> dict[str, Color]:
     the link's first ``<visual>``.
 
     Returns:
-        Colour by URDF link name; links with no visual are absent (paint them
-        :data:`~sigcore.world.visuals.DEFAULT_COLOR`); empty for shapes, meshes and humans.
+        Colour by URDF link name (a person's generated one too); links with no visual are absent (paint them
+        :data:`~sigcore.world.visuals.DEFAULT_COLOR`); empty for shapes and meshes.
     """
-    if isinstance(entity, Human) or (isinstance(entity, Object) and entity.urdf is None):
+    if isinstance(entity, Object) and entity.urdf is None:
         return {}
     document = world.urdf(entity.name)
     given = _given_color(entity)

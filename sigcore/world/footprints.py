@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .appearance import entity_scene, links_in_root, visual_corners
-from .models import Entity, Robot, World
+from .models import Entity, Human, Robot, World
 
 log = logging.getLogger("sigcore.randomize")
 
@@ -39,7 +39,7 @@ def local_bounds(entity: Entity, world: World) -> Bounds | None:
     None when a mesh's vertices cannot be read."""
     scene = entity_scene(world, entity, lambda _robot, link: link)
     frames: dict[str, tuple[np.ndarray, np.ndarray]] = {entity.name: (np.zeros(3), np.array([1.0, 0, 0, 0]))}
-    if isinstance(entity, Robot):
+    if isinstance(entity, Robot | Human):
         document = world.urdf(entity.name)
         frames.update(links_in_root(document.root, document.model.root))
     points = []

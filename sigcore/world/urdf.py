@@ -12,10 +12,12 @@ import copy
 import math
 import os
 import re
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
+import numpy as np
 from lxml import etree
 
 from .exceptions import UrdfError
@@ -60,6 +62,27 @@ class UrdfModel:
     def movable_joints(self) -> tuple[UrdfJoint, ...]:
         """Joints with one degree of freedom, in file order."""
         return tuple(j for j in self.joints if j.movable)
+
+    def link_pose(self, link: str, angles: Mapping[str, float], xyz: Sequence[float],
+                  wxyz: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+        """The pose ``(xyz, wxyz)`` of ``link`` when the root link is at ``(xyz, wxyz)`` and the movable joints at
+        ``angles`` [rad] (revolute and continuous: a rotation about the axis after the joint's ``<origin>``; others
+        at 0), as robot_state_publisher composes it. Raises ``KeyError`` for an unknown link."""
+        from ..geometry import quat_from_axis_angle, quat_from_rpy, quat_mul, quat_rotate
+
+        by_child = {j.child: j for j in self.joints}
+        chain = []
+        while link != self.root:
+            joint = by_child[link]
+            chain.append(joint)
+            link = joint.parent
+        pos, quat = np.asarray(xyz, dtype=float), np.asarray(wxyz, dtype=float)
+        for joint in reversed(chain):
+            pos = pos + quat_rotate(quat, np.array(joint.origin_xyz))
+            quat = quat_mul(quat, quat_from_rpy(*joint.origin_rpy))
+            if joint.type in ("revolute", "continuous") and joint.name in angles:
+                quat = quat_mul(quat, quat_from_axis_angle(np.array(joint.axis), angles[joint.name]))
+        return pos, quat
 
     def joint(self, name: str) -> UrdfJoint:
         """The joint called ``name``; ``KeyError`` listing the valid names otherwise."""
@@ -111,6 +134,12 @@ class UrdfDocument:
             raise UrdfError(path, 0, f"cannot decode as {encoding}: {err}") from None
         return cls(path, text, root)
 
+    @classmethod
+    def generated(cls, path: Path, text: str) -> UrdfDocument:
+        """A document sigcore wrote itself (a person's body, :mod:`sigcore.world.body`), named ``path`` in
+        messages (no file is read)."""
+        return cls(path, text, etree.fromstring(text.encode(), etree.XMLParser(**PARSER_OPTIONS)))
+
     @property
     def root(self) -> etree._Element:
         """The parsed ``<robot>`` element, shared by every user: read it, never change it (see
@@ -136,6 +165,7 @@ class UrdfFiles:
 
     def __init__(self) -> None:
         self._documents: dict[Path, UrdfDocument] = {}
+        self._generated: dict[tuple[object, ...], UrdfDocument] = {}
 
     def get(self, path: Path) -> UrdfDocument:
         """The document of the file at ``path``, read now if it was not read before.
@@ -147,6 +177,13 @@ class UrdfFiles:
         document = self._documents.get(key)
         if document is None:
             document = self._documents[key] = UrdfDocument.read(Path(os.path.normpath(path)))
+        return document
+
+    def generated(self, key: tuple[object, ...], path: Path, write: Callable[[], str]) -> UrdfDocument:
+        """The generated document for ``key`` (written by ``write`` on first use, then shared)."""
+        document = self._generated.get(key)
+        if document is None:
+            document = self._generated[key] = UrdfDocument.generated(path, write())
         return document
 
     @property

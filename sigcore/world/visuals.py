@@ -34,7 +34,8 @@ class Visual:
     Attributes:
         frame: The frame it is attached to: the link's name for a URDF visual read here; the TF frame in the scene
             (a robot's link frame, or the entity's frame).
-        shape: ``box``, ``sphere``, ``cylinder``, ``capsule`` (scene only) or ``mesh``; cylinders and capsules along z.
+        shape: ``box``, ``sphere``, ``cylinder``, ``capsule`` (a world primitive, or a URDF ``<capsule>`` as
+            MuJoCo and PyBullet read it) or ``mesh``; cylinders and capsules along z.
         size: box: full lengths (3,) [m]; sphere: (radius,) [m]; cylinder, capsule: (radius, length) [m] (a
             capsule's length is its cylindrical part's); mesh: scale per axis (3,).
         xyz: Position in ``frame`` [m] (``<origin xyz>``).
@@ -110,7 +111,7 @@ def _geometry(visual: etree._Element, link: str,
         size = _floats(shape.get("size"), 3)
     elif shape is not None and tag == "sphere":
         size = _floats(shape.get("radius"), 1)
-    elif shape is not None and tag == "cylinder":
+    elif shape is not None and tag in ("cylinder", "capsule"):  # <capsule>: the engines' URDF extension
         radius, length = _floats(shape.get("radius"), 1), _floats(shape.get("length"), 1)
         size = (radius[0], length[0]) if radius and length else None
     elif shape is not None and tag == "mesh":

@@ -93,28 +93,32 @@ def test_cleanup_robot_stands_still_when_braked() -> None:
 
 
 def test_static_human_is_frozen_then_freed_with_its_mass(tmp_path: Path) -> None:
-    """A static human is held by zero mass (no work per step), keeps its world mass, falls with dynamics on
-    after a set_mass, and is static again after a reset (which then rebuilds the world)."""
+    """A static human's base has mass 0 (PyBullet's fixed base: no work per step for it) and it keeps its world
+    mass; with dynamics on after a set_mass it is a new rigid body with the doubled masses and falls onto its feet;
+    after a reset (which then rebuilds the world) it is held again."""
     (tmp_path / "w.xml").write_text('<world name="w" timestep="0.002"><human name="h" pose="0 0 0.5"/></world>')
     b = BulletBackend()
     b.build(parse_world(tmp_path / "w.xml"))
     h = b._entities["h"]
     for _ in range(200):
         b.step()
-    assert b._held == {} and pb.getDynamicsInfo(h.body, -1, physicsClientId=b.client)[0] == 0.0
+    assert b._posed == {"h"} and pb.getDynamicsInfo(h.body, -1, physicsClientId=b.client)[0] == 0.0
     np.testing.assert_allclose(b.get_pose("h")[0], [0.0, 0.0, 0.5], atol=1e-12)
     mass0 = b.get_mass("h")
-    assert mass0 > 0.0
+    assert mass0 == pytest.approx(70.0)
     b.set_mass("h", 2 * mass0)
     assert pb.getDynamicsInfo(h.body, -1, physicsClientId=b.client)[0] == 0.0  # still frozen
     b.set_dynamics_mode("h", True)
-    assert pb.getDynamicsInfo(h.body, -1, physicsClientId=b.client)[0] == pytest.approx(2 * mass0)
+    h = b._entities["h"]
+    assert h.rigid and b._posed == set()
+    total = sum(pb.getDynamicsInfo(h.body, link, physicsClientId=b.client)[0] for link in h.links)
+    assert total == pytest.approx(2 * mass0)
     for _ in range(300):
         b.step()
     assert b.get_pose("h")[0][2] == pytest.approx(0.0, abs=0.003)  # fell onto its feet
     b.reset()
     h = b._entities["h"]
-    assert pb.getDynamicsInfo(h.body, -1, physicsClientId=b.client)[0] == 0.0
+    assert not h.rigid and pb.getDynamicsInfo(h.body, -1, physicsClientId=b.client)[0] == 0.0
     assert b.get_mass("h") == pytest.approx(mass0)
     for _ in range(100):
         b.step()

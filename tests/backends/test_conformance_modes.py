@@ -79,7 +79,7 @@ def test_static_human_held_until_dynamics_on(make_world, build) -> None:
     for _ in range(100):
         b.apply_wrench("h", None, np.array([1000.0, 0, 0]), np.zeros(3))
         b.step()
-    assert b.get_com("h")[0] > 0.05  # it topples or slides
+    assert 0.05 < b.get_com("h")[0] < 2.0  # it topples or slides (1000 N for 0.2 s on 70 kg: not flung away)
 
 
 def test_human_stands_on_its_feet(make_world, build) -> None:

@@ -148,14 +148,15 @@ def test_max_range_gives_inf(make_world, build) -> None:
 
 def test_other_entities_are_hit(make_world, build) -> None:
     """Objects, humans and other robots are hit by rays that exclude the sensor's robot."""
-    b = build(make_world(ROOM + robot() + '<human name="h" pose="1.5 0 0"/>'
+    hip = 0.6 * 1.7 / 7.5  # the left leg of a person 1.7 m tall at its y = 0.136 m (sigcore.world.body)
+    b = build(make_world(ROOM + robot() + f'<human name="h" pose="1.5 {-hip} 0"/>'
                          '<object name="o" shape="box" size="0.2 0.2 0.2" pose="0 1 0.25"/>'))
     origin = b.get_pose("bot", "lidar_link")[0]
     slanted = np.array([-0.1, 1.0, 0.0])
     dirs = np.array([[1.0, 0.0, 0.0], slanted / np.linalg.norm(slanted)])
     dist = b.ray_cast(origin, dirs, 10.0, exclude="bot")
-    r_body = 0.09 * 1.7
-    assert dist[0] == pytest.approx(1.5 - r_body - 0.1, abs=1e-6)
+    r_shank = 0.06
+    assert dist[0] == pytest.approx(1.5 - r_shank - 0.1, abs=1e-6)
     assert 0.85 < dist[1] < 0.95
 
 

@@ -52,13 +52,15 @@ def test_registered_under_its_name(backend_name: str) -> None:
 
 
 def test_parts_and_joints(make_world, build) -> None:
-    """Robot parts are all URDF links, root first, fixed links included; objects and humans have 'main'."""
+    """Robot parts are all URDF links, root first, fixed links included; objects have 'main'; a person its feet
+    'main' then its body's links, and its joints."""
     b = build(make_world(robot() + '<object name="o" shape="sphere" size="0.1" pose="2 0 1"/>'
                          '<human name="h" pose="-3 0 0"/><agent name="mod"/>'))
     assert b.parts("bot") == LINKS
     assert b.joints("bot") == ["wheel_l_joint", "wheel_r_joint", "shoulder", "elbow"]
     assert b.parts("o") == ["main"] and b.joints("o") == []
-    assert b.parts("h") == ["main"]
+    assert b.parts("h")[:3] == ["main", "body", "waist"] and len(b.parts("h")) == 28
+    assert len(b.joints("h")) == 22 and "l_knee" in b.joints("h")
     with pytest.raises(BackendError, match="entities: bot, o, h"):
         b.parts("mod")
     with pytest.raises(BackendError, match="parts: base_link"):

@@ -89,6 +89,6 @@ def test_the_recorded_task_replays_bit_for_bit(task: dict) -> None:
     r = subprocess.run([sys.executable, "-m", "sigcore", "replay", str(task["bag"])], capture_output=True, text=True,
                        timeout=300, cwd=ROOT)
     assert r.returncode == 0, r.stdout + r.stderr[-3000:]
-    assert re.search(r"ground truth at step \d+: 38 frames, bitwise equal", r.stdout), r.stdout
+    assert re.search(r"ground truth at step \d+: 65 frames, bitwise equal", r.stdout), r.stdout
     applied = int(re.search(r"(\d+) commands applied", r.stdout).group(1))  # type: ignore[union-attr]
     assert applied > 1000

@@ -33,7 +33,8 @@ WORLD = """<world name="scene" timestep="0.002">
 
 def test_late_node_receives_robot_description_and_scene(tmp_path: Path) -> None:
     """A node started after the simulation is ready receives /robot_description and /bot/robot_description equal
-    to the URDF, and a MarkerArray with markers for every entity with the world file's sizes and colours."""
+    to the URDF, /man/robot_description (the person's generated URDF with REP-155 names, no capsule), and a
+    MarkerArray with markers for every entity with the world file's sizes and colours."""
     shutil.copy(DATA / "sim" / "minibot.urdf", tmp_path / "minibot.urdf")
     shutil.copy(DATA / "worlds" / "models" / "mug.obj", tmp_path / "mug.obj")
     world = tmp_path / "world.xml"
@@ -42,10 +43,14 @@ def test_late_node_receives_robot_description_and_scene(tmp_path: Path) -> None:
     assert expected == (tmp_path / "minibot.urdf").read_text()  # nothing to rewrite: the file as it is
     sim = start_sim(tmp_path, world, "--realtime")
     try:
-        r = sim.client("scene.py", "/robot_description", "/bot/robot_description", timeout=90)
+        r = sim.client("scene.py", "/robot_description", "/bot/robot_description", "/man/robot_description",
+                       timeout=90)
     finally:
         sim.stop()
-    assert r["texts"] == {"/robot_description": [expected], "/bot/robot_description": [expected]}
+    person = robot_description(parse_world(world), "man")
+    assert "<capsule" not in person and 'link name="head_man"' in person and 'joint name="l_knee_man"' in person
+    assert r["texts"] == {"/robot_description": [expected], "/bot/robot_description": [expected],
+                          "/man/robot_description": [person]}
     assert r["scenes"] == 1
     by_ns: dict[str, list[dict]] = {}
     for m in r["markers"][1:]:
@@ -65,5 +70,7 @@ def test_late_node_receives_robot_description_and_scene(tmp_path: Path) -> None:
     (mug,) = by_ns["mug"]
     assert (mug["type"], mug["scale"], mug["color"]) == (MESH_RESOURCE, approx([1.5] * 3), approx([0, 0.5, 0, 1]))
     assert mug["mesh_resource"] == f"file://{(tmp_path / 'mug.obj').resolve()}"
-    assert [m["type"] for m in by_ns["man"]] == [CYLINDER, SPHERE, SPHERE, SPHERE]
+    person_types = [m["type"] for m in by_ns["man"]]  # 10 capsules (a cylinder, two spheres), head, hands, feet
+    assert (person_types.count(CYLINDER), person_types.count(SPHERE), len(person_types)) == (10, 23, 35)
+    assert "head_man" in {m["frame"] for m in by_ns["man"]}
     assert {m["frame"] for m in by_ns["bot"]} == {"base_link", "laser_link"}  # minibot's links with a <visual>

@@ -71,6 +71,11 @@ def test_every_link_and_entity_is_in_one_tree_rooted_at_world(probe: dict[str, A
     tree = _tree(probe)
     assert set(probe["links"]) <= set(tree)
     assert tree["can_0"][0] == tree["man_0"][0] == "world"
+    person = parse_world(WORLD).urdf("man_0").model  # a person's REP-155 frames: <link>_man_0
+    assert {f"{link}_man_0" for link in person.links if link != person.root} <= set(tree)
+    assert tree["body_man_0"][0] == "man_0" and tree["l_y_hip_man_0"][0] == "body_man_0"
+    unit = 1.7 / 7.5  # standing, facing -x at (4.2, 1.5): the head frame at the face, half a head radius forward
+    np.testing.assert_allclose(_in(tree, "head_man_0")[0], [4.2 - unit / 4, 1.5, 1.7 - unit / 2], atol=1e-6)
     assert {_in(tree, frame)[2] for frame in tree} == {"world"}
     assert {frame for _, _, frame in probe["scans"]} == {"base_laser_link"}
 
@@ -113,8 +118,8 @@ def test_odometry_carries_the_documented_covariance(probe: dict[str, Any]) -> No
 
 @pytest.mark.parametrize("rate", [20, 0])
 def test_entity_tf_rate_sets_the_rate_of_entity_frames_and_zero_turns_them_off(tmp_path: Path, rate: int) -> None:
-    """With entity_tf_rate="20" every object and human is on /tf every 50 ms of simulated time; with "0" none is,
-    while the robot's joints still are."""
+    """With entity_tf_rate="20" every object is on /tf every 50 ms of simulated time; with "0" none is, while the
+    robot's joints and the person's frames (published with the joint states) still are."""
     text = SIM_WORLD.read_text().replace('urdf="minibot.urdf"', f'urdf="{SIM_WORLD.parent / "minibot.urdf"}"')
     world = tmp_path / "world.xml"
     world.write_text(text.replace("</world>", f'  <plugin name="ros2" entity_tf_rate="{rate}"/>\n</world>'))
@@ -123,8 +128,9 @@ def test_entity_tf_rate_sets_the_rate_of_entity_frames_and_zero_turns_them_off(t
         pairs = sim.client("tf_listen.py", "1.5")
     finally:
         sim.stop()
-    entities = {"cube", "ball", "heavy", "wall", "man"}
+    entities = {"cube", "ball", "heavy", "wall"}
     assert "base_link wheel_l_link" in pairs and "base_link upper_arm_link" in pairs
+    assert "world man" in pairs and "l_p_hip_man l_hip_man" in pairs
     assert "base_link laser_link" not in pairs  # a fixed joint: on /tf_static only
     if rate == 0:
         assert not {key.split()[1] for key in pairs} & entities

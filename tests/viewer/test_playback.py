@@ -35,6 +35,7 @@ from sigcore_viewer.viewer import WebViewer
 
 from sigcore.geometry import quat_to_matrix
 from sigcore.record import Recorder
+from sigcore.record.recorder import truth_frame
 from sigcore.record.replay import load_recording
 from sigcore.sim import Simulation, run
 from sigcore.world import parse_world
@@ -312,8 +313,10 @@ def test_the_ground_truth_is_read_exactly_and_a_cut_recording_up_to_its_cut(reco
     whole = playback.load(recording, tmp_path / "w1")
     truth = load_recording(recording).truth
     assert [int(t) for t in whole.times] == [step * DT_NS for step, _ in truth]
-    names = ["ground_truth/" + (f"{entity}/{frame}" if entity == "robot_000" else entity)
+    linked = {"robot_000", "man_0"}  # the entities with link frames: the robot and the person
+    names = [truth_frame(entity, frame, entity in linked)
              for (entity, _), frame in zip(whole.layout.parts, whole.layout.frames, strict=True)]
+    assert "ground_truth/man_0/head_man_0" in names and "ground_truth/man_0" in names
     for k, (_, poses) in enumerate(truth):
         assert np.array_equal(whole.poses[k], np.stack([poses[n] for n in names])), k
     assert whole.tracked.all() and not whole.untracked and not whole.problems

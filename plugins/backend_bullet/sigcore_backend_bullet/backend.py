@@ -17,6 +17,8 @@ number of simulations live in one process. Techniques (each checked by ``tests/b
 * **Dynamics off** (held entities): after every step the base pose and joint positions are restored and the
   velocities zeroed (the MuJoCo backend's technique); ``set_pose``/``set_joint_angle`` update the held values.
   Static objects have mass 0 (PyBullet's static bodies) and cannot become dynamic.
+* **Persons** (``<human>``): their generated URDF, held with kinematic joints or dynamic as a rigid mannequin
+  (see :mod:`.base`); they have no motors: ``set_joint_angle`` poses them.
 * **Servos.** Arm joints in position mode: a velocity motor at ``(kp / kv) (target - q)`` whose force limit is
   set before each step to the spring-damper torque ``|kp e - kv qdot|`` (see :mod:`.servo`), at most the gains'
   ``max_torque`` and the URDF ``effort``. Wheels and velocity mode: ``VELOCITY_CONTROL`` with force = the torque
@@ -72,6 +74,8 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
     def __init__(self) -> None:
         self.client = -1
         self._built = False
+        self._builds = 0
+        """How many times the world was created in the client (the renderer paints each new body)."""
 
     def __del__(self) -> None:
         try:
@@ -114,6 +118,7 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
             self.close()
             raise
         self._entities = {e.name: e for e in entities}
+        self._builds += 1
         self._pairs = PairFilters()  # the client is new or was reset: it holds no pair entry
         self._collision_off = set()
         self._index()
@@ -155,7 +160,10 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
         self._mass = {n: list(e.masses0) for n, e in self._entities.items()}
         self._nograv = set()
         self._held = {}
-        for e in self._entities.values():
+        self._posed = set()
+        self._posture = {n: [j.initial for j in e.joints.values()] for n, e in self._entities.items()
+                         if e.kind == "human"}
+        for e in list(self._entities.values()):
             if e.held0:
                 self._hold(e, initial=True)
 
@@ -165,8 +173,10 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
             self._start_motors(e)
 
     def _start_motors(self, e: EntityIndex) -> None:
-        """Brake ``e``'s wheels and hold its arm joints where they are (a new servo bank)."""
+        """Brake ``e``'s wheels and hold its arm joints where they are (a new servo bank); a person has none."""
         c = self.client
+        if e.kind == "human":
+            return
         bank = ServoBank(e.body)
         for j in e.joints.values():
             if not j.wheel:
@@ -192,6 +202,8 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
         self._tick += 1
         if self._held:
             self._restore_held()
+        if self._posed:
+            self._restore_posed()
 
     def _compensate_gravity(self) -> None:
         c = self.client
@@ -213,8 +225,12 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
             if not e.welded:
                 pb.resetBasePositionAndOrientation(e.body, pos, orn, physicsClientId=c)
                 pb.resetBaseVelocity(e.body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)
-            for j, q in zip(e.joints.values(), angles, strict=True):
-                pb.resetJointState(e.body, j.index, q, 0.0, physicsClientId=c)
+            self._reset_joints(e, angles)
+
+    def _restore_posed(self) -> None:
+        """Every held person's joints back at its posture, at rest (its base has mass 0: it does not move)."""
+        for name in self._posed:
+            self._reset_joints(self._entities[name], self._posture[name])
 
     def reset(self) -> None:
         """Back to the state right after build.
@@ -277,6 +293,8 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
         for e in made:
             self._entities[e.name] = e
             self._mass[e.name] = list(e.masses0)
+            if e.kind == "human":
+                self._posture[e.name] = [j.initial for j in e.joints.values()]
             self._start_motors(e)
             if e.held0:
                 self._hold(e, initial=True)
@@ -299,9 +317,9 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
         for e in gone:
             pb.removeBody(e.body, physicsClientId=c)
             del self._entities[e.name]
-            for per_entity in (self._servos, self._mass, self._held):
+            for per_entity in (self._servos, self._mass, self._held, self._posture):
                 per_entity.pop(e.name, None)
-            for names_set in (self._nograv, self._frozen, self._collision_off):
+            for names_set in (self._nograv, self._frozen, self._collision_off, self._posed):
                 names_set.discard(e.name)
         self._world = world
         self._index()
@@ -317,11 +335,12 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
 
     # ------------------------------------------------------------------ introspection
     def parts(self, entity: str) -> list[str]:
-        """Part names of ``entity``, main part first (a robot's root link; ``main`` otherwise)."""
+        """Part names of ``entity``, main part first: a robot's or a person's URDF links, root first (a person's
+        root is ``main``, at its feet); ``main`` for an object."""
         return list(self._entity(entity).parts)
 
     def joints(self, entity: str) -> list[str]:
-        """Movable joints of a robot in URDF order; empty for objects and humans."""
+        """Movable joints of a robot or a person in URDF order; empty for objects."""
         return list(self._entity(entity).joints)
 
     # ------------------------------------------------------------------ grasping

@@ -4,7 +4,10 @@
 * an object: a multibody from ``createCollisionShape`` (box half extents = full lengths / 2; cylinder and
   capsule ``height`` = the world's length) or a mesh (``GEOM_MESH``, collides as its convex hull), or its URDF
   with ``loadURDF``; ``baseMass`` 0 / ``useFixedBase`` when ``static``;
-* a human: one multibody, a capsule and a sphere head, frame at the feet, inertial frame at their centre of mass;
+* a human: its generated URDF (:mod:`sigcore.world.body`: REP-155 links, capsules, spheres and two foot boxes)
+  with ``loadURDF`` as for a robot, root link ``main`` at the feet; held (static) with its revolute joints
+  ``continuous``, dynamic with them ``fixed`` at their angles (a rigid mannequin: :func:`.urdf_prep.pose_joints`);
+  no motors;
 * a robot: ``loadURDF`` with ``URDF_USE_INERTIA_FROM_FILE`` (masses and inertias from ``<inertial>``) and
   ``URDF_USE_IMPLICIT_CYLINDER`` (round wheels, not a polygon hull); fixed links stay links; no
   self-collision (PyBullet's default without ``URDF_USE_SELF_COLLISION``).
@@ -15,20 +18,19 @@ No visual shapes are made: the client runs in ``DIRECT`` mode and sigcore render
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Sequence
 
 import pybullet as pb
 
-from sigcore.backend import MAIN
+from sigcore.backend import MAIN, entity_urdf
 from sigcore.errors import BackendError
-from sigcore.world.appearance import human_dimensions
-from sigcore.world.exceptions import UrdfError
 from sigcore.world.meshes import mesh_problem
 from sigcore.world.models import Entity, Human, Object, Robot, World
 from sigcore.world.urdf import UrdfDocument
 
 from .frames import quat_from_rpy
 from .layout import BASE, GROUP_STATIC, MASK_STATIC, EntityIndex, JointIndex
-from .urdf_prep import prepare_urdf, write_temp
+from .urdf_prep import pose_joints, prepare_urdf, write_temp
 
 _URDF_FLAGS = pb.URDF_USE_INERTIA_FROM_FILE | pb.URDF_USE_IMPLICIT_CYLINDER
 _DEFAULT_FRICTION = 1.0
@@ -64,7 +66,7 @@ def build_entity(client: int, world: World, entity: Entity) -> EntityIndex:
     if isinstance(entity, Robot):
         e = _add_robot(client, world, entity)
     elif isinstance(entity, Human):
-        e = _add_human(client, entity)
+        e = _add_human(client, world, entity)
     elif entity.urdf is not None:
         e = _add_urdf_object(client, world, entity)
     else:
@@ -82,9 +84,8 @@ def build_entity(client: int, world: World, entity: Entity) -> EntityIndex:
 
 def _finish(client: int, e: EntityIndex) -> None:
     """Record the base's inertial frame and the masses; set the collision filter of every link."""
-    if e.kind != "human":  # a human's frame (its feet) was set by _add_human
-        info = pb.getDynamicsInfo(e.body, BASE, physicsClientId=client)
-        e.local_pos, e.local_orn = tuple(info[3]), tuple(info[4])
+    info = pb.getDynamicsInfo(e.body, BASE, physicsClientId=client)
+    e.local_pos, e.local_orn = tuple(info[3]), tuple(info[4])
     known = len(e.masses0)  # a static primitive's mass is the world's (set by _add_shape_object)
     for i, link in enumerate(e.links):
         if i >= known:
@@ -111,19 +112,11 @@ def _scale_mass(client: int, e: EntityIndex, mass: float) -> None:
                               physicsClientId=client)
 
 
-def _document(world: World, entity: str, what: str) -> UrdfDocument:
-    """The world's shared URDF of ``entity``; ``BackendError`` naming the entity if it cannot be read."""
-    try:
-        return world.urdf(entity)
-    except UrdfError as e:
-        raise BackendError(f"{what}: {e}") from None
-
-
 def _load_urdf(client: int, urdf: UrdfDocument, what: str, pose_xyz: tuple[float, float, float],
-               rpy: tuple[float, float, float], fixed: bool, scale: float = 1.0) -> tuple[int, dict[str, float],
-                                                                                       frozenset[str]]:
+               rpy: tuple[float, float, float], fixed: bool, scale: float = 1.0,
+               rewrite: Callable[[str], str] | None = None) -> tuple[int, dict[str, float], frozenset[str]]:
     prepared = prepare_urdf(urdf, what, floating=not fixed)
-    tmp = write_temp(prepared.text)
+    tmp = write_temp(prepared.text if rewrite is None else rewrite(prepared.text))
     try:
         body = pb.loadURDF(tmp, list(pose_xyz), quat_from_rpy(*rpy), useFixedBase=fixed, flags=_URDF_FLAGS,
                            globalScaling=scale, physicsClientId=client)
@@ -151,11 +144,8 @@ def _friction(client: int, body: int, links: dict[str, int], friction: dict[str,
 # ---------------------------------------------------------------------------------------------------- robots
 def _add_robot(client: int, world: World, robot: Robot) -> EntityIndex:
     what = f"robot '{robot.name}'"
-    document = _document(world, robot.name, what)
-    try:
-        urdf = document.model
-    except UrdfError as e:
-        raise BackendError(f"{what}: {e}") from None
+    document = entity_urdf(world, robot.name, what)
+    urdf = document.model
     body, friction, _ = _load_urdf(client, document, what, robot.pose.xyz, robot.pose.rpy, robot.fixed)
     links = _link_names(client, body)
     _friction(client, body, links, friction, _DEFAULT_FRICTION)
@@ -186,8 +176,8 @@ def _add_robot(client: int, world: World, robot: Robot) -> EntityIndex:
 def _add_urdf_object(client: int, world: World, obj: Object) -> EntityIndex:
     assert obj.urdf is not None
     what = f"object '{obj.name}'"
-    body, friction, _ = _load_urdf(client, _document(world, obj.name, what), what, obj.pose.xyz, obj.pose.rpy,
-                                   obj.static, obj.scale)
+    document = entity_urdf(world, obj.name, what, tree=False)
+    body, friction, _ = _load_urdf(client, document, what, obj.pose.xyz, obj.pose.rpy, obj.static, obj.scale)
     links = _link_names(client, body)
     _friction(client, body, links, friction, obj.friction)
     n = pb.getNumJoints(body, physicsClientId=client)
@@ -235,18 +225,57 @@ def _primitive(client: int, shape: str, size: tuple[float, ...]) -> int:
     return int(pb.createCollisionShape(kind, radius=size[0], height=size[1], physicsClientId=client))
 
 
-def _add_human(client: int, human: Human) -> EntityIndex:
-    r_body, r_head, top = human_dimensions(human.height)
-    capsule_z, head_z = top / 2, top + r_head
-    com_z = 0.92 * capsule_z + 0.08 * head_z
-    shape = pb.createCollisionShapeArray(
-        [pb.GEOM_CAPSULE, pb.GEOM_SPHERE], radii=[r_body, r_head], lengths=[top - 2 * r_body, 0.0],
-        collisionFramePositions=[[0, 0, capsule_z - com_z], [0, 0, head_z - com_z]], physicsClientId=client)
-    pos = list(human.pose.xyz)
-    orn = quat_from_rpy(*human.pose.rpy)
-    com, _ = pb.multiplyTransforms(pos, orn, [0, 0, com_z], [0, 0, 0, 1])
-    body = pb.createMultiBody(human.mass, shape, basePosition=com, baseOrientation=orn, physicsClientId=client)
-    pb.changeDynamics(body, BASE, lateralFriction=_DEFAULT_FRICTION, physicsClientId=client)
-    e = EntityIndex(human.name, "human", body, [MAIN], {MAIN: BASE}, [BASE], False, held0=human.static)
-    e.local_pos = (0.0, 0.0, com_z)  # the frame at the feet, below the centre of mass
-    return e
+def _add_human(client: int, world: World, human: Human, angles: Sequence[float] | None = None,
+               rigid: bool | None = None) -> EntityIndex:
+    """A person from its generated URDF (``world.urdf``), at its model pose.
+
+    Args:
+        angles: Its joint angles [rad] in URDF order (default: all 0, as the URDF has them).
+        rigid: Build it as a rigid mannequin (joints fixed at ``angles``) rather than with kinematic joints
+            (default: rigid when it is not static).
+    """
+    what = f"human '{human.name}'"
+    document = entity_urdf(world, human.name, what)
+    urdf = document.model
+    movable = urdf.movable_joints
+    posture = [0.0] * len(movable) if angles is None else [float(a) for a in angles]
+    rigid = not human.static if rigid is None else rigid
+    by_name = {j.name: q for j, q in zip(movable, posture, strict=True)}
+    body, friction, _ = _load_urdf(client, document, what, human.pose.xyz, human.pose.rpy, False,
+                                   rewrite=lambda text: pose_joints(text, by_name if rigid else None))
+    links = _link_names(client, body)
+    _friction(client, body, links, friction, _DEFAULT_FRICTION)
+    n = pb.getNumJoints(body, physicsClientId=client)
+    # every joint's default motor off (PyBullet starts each with a velocity motor that brakes it)
+    pb.setJointMotorControlArray(body, list(range(n)), pb.VELOCITY_CONTROL, forces=[0.0] * n,
+                                 physicsClientId=client)
+    joints = {j.name: JointIndex(links[j.child], False, 0.0) for j in movable}
+    if not rigid and any(posture):
+        indices = [j.index for j in joints.values()]
+        pb.resetJointStatesMultiDof(body, indices, [[q] for q in posture], [[0.0]] * len(indices),
+                                    physicsClientId=client)
+    parts = [urdf.root] + [link for link in urdf.links if link != urdf.root]
+    part_link = {part: links[part] for part in parts}
+    part_link[MAIN] = BASE
+    return EntityIndex(human.name, "human", body, parts, part_link, [BASE] + list(range(n)), False, joints,
+                       held0=human.static, rigid=rigid)
+
+
+def rebuild_human(client: int, world: World, e: EntityIndex, angles: Sequence[float], rigid: bool) -> EntityIndex:
+    """Replace the body of the person ``e`` by a new one (rigid, or with kinematic joints) with these joint
+    ``angles``, its base where and as fast as ``e``'s (the old body is removed).
+
+    Returns:
+        The new index (same parts, joints and link indices; its masses those of the URDF, its collision filters
+        the default ones: the caller applies its own).
+    """
+    human = world.agent(e.name)
+    assert isinstance(human, Human)
+    pos, orn = pb.getBasePositionAndOrientation(e.body, physicsClientId=client)
+    lin, ang = pb.getBaseVelocity(e.body, physicsClientId=client)
+    new = _add_human(client, world, human, angles, rigid)  # made before the old one goes: a failure leaves it
+    _finish(client, new)
+    pb.removeBody(e.body, physicsClientId=client)
+    pb.resetBasePositionAndOrientation(new.body, pos, orn, physicsClientId=client)
+    pb.resetBaseVelocity(new.body, lin, ang, physicsClientId=client)
+    return new

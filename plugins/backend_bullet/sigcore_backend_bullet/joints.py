@@ -1,28 +1,45 @@
-"""Joint angles, velocities, servo targets and torques of :class:`~.backend.BulletBackend`'s robots (a mixin)."""
+"""Joint angles, velocities, servo targets and torques of :class:`~.backend.BulletBackend`'s robots, and the
+postures of its persons (a mixin; a person's joints have no motor, see :mod:`.base`)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pybullet as pb
 
-from sigcore.backend import Array
+from sigcore.backend import Array, passive_joint
 from sigcore.errors import BackendRefusal
 
 from .base import BulletBase
+from .layout import EntityIndex, JointIndex
 
 
 class BulletJoints(BulletBase):
     """Reading joints and commanding them through their motors (see :mod:`.servo`)."""
 
     def get_joint_angle(self, entity: str, joint: str) -> float:
-        """``getJointState`` position [rad] or [m]."""
-        e = self._entity(entity)
-        return float(pb.getJointState(e.body, e.joint(joint).index, physicsClientId=self.client)[0])
-
-    def set_joint_angle(self, entity: str, joint: str, angle: float) -> None:
-        """``resetJointState`` (velocity 0); an arm joint's position servo then holds ``angle``."""
+        """``getJointState`` position [rad] or [m]; a person's: its posture (a mannequin's joints are fixed)."""
         e = self._entity(entity)
         j = e.joint(joint)
+        if e.kind == "human":
+            return self._posture[e.name][list(e.joints).index(joint)]
+        return float(pb.getJointState(e.body, j.index, physicsClientId=self.client)[0])
+
+    def set_joint_angle(self, entity: str, joint: str, angle: float) -> None:
+        """``resetJointState`` (velocity 0); an arm joint's position servo then holds ``angle``. A person keeps
+        it: held, its joints are put back at it after every step; a mannequin gets a new rigid body."""
+        e = self._entity(entity)
+        j = e.joint(joint)
+        if e.kind == "human":
+            posture, k = self._posture[e.name], list(e.joints).index(joint)
+            if e.rigid and posture[k] == angle:
+                return  # a mannequin's body is built again only for a new posture
+            posture[k] = float(angle)
+            if e.rigid:
+                self._rebuild_human(e, rigid=True)
+            else:
+                pb.resetJointState(e.body, j.index, angle, 0.0, physicsClientId=self.client)
+            self._tick += 1
+            return
         pb.resetJointState(e.body, j.index, angle, 0.0, physicsClientId=self.client)
         if not j.wheel:
             self._position_servo(e, j, angle)
@@ -41,8 +58,7 @@ class BulletJoints(BulletBase):
         Raises:
             BackendRefusal: the joint is a drive wheel (always a velocity servo).
         """
-        e = self._entity(entity)
-        j = e.joint(joint)
+        e, j = self._motor(entity, joint)
         if j.wheel:
             arms = [n for n, x in e.joints.items() if not x.wheel]
             raise BackendRefusal(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
@@ -53,8 +69,7 @@ class BulletJoints(BulletBase):
     def set_joint_velocity(self, entity: str, joint: str, velocity: float,
                            max_torque: float | None = None) -> None:
         """``VELOCITY_CONTROL`` at ``velocity`` with force ``max_torque`` (default: the drive's or the gains')."""
-        e = self._entity(entity)
-        j = e.joint(joint)
+        e, j = self._motor(entity, joint)
         torque = j.max_torque if max_torque is None else max_torque
         if not j.wheel:
             self._servos[e.name].release(j.index)
@@ -63,10 +78,21 @@ class BulletJoints(BulletBase):
 
     def add_joint_torque(self, entity: str, joint: str, torque: float) -> None:
         """``TORQUE_CONTROL`` for the next step (on top of the joint's motor)."""
+        e, j = self._motor(entity, joint)
         self._wake()
+        pb.setJointMotorControl2(e.body, j.index, pb.TORQUE_CONTROL, force=torque, physicsClientId=self.client)
+
+    def _motor(self, entity: str, joint: str) -> tuple[EntityIndex, JointIndex]:
+        """The entity and joint to drive.
+
+        Raises:
+            BackendRefusal: no such joint (listing the valid ones), or a joint of a person (it has no motor).
+        """
         e = self._entity(entity)
-        pb.setJointMotorControl2(e.body, e.joint(joint).index, pb.TORQUE_CONTROL, force=torque,
-                                 physicsClientId=self.client)
+        j = e.joint(joint)
+        if e.kind == "human":
+            raise BackendRefusal(passive_joint(entity, joint))
+        return e, j
 
     def get_joint_position(self, entity: str, joint: str) -> Array:
         """World position [m] of the joint anchor: the child link's URDF frame origin."""

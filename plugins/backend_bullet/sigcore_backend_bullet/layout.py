@@ -1,12 +1,13 @@
 """What the builder made of each entity: PyBullet body and link indices, joints and their drives.
 
-Part ids, used by contacts, are: 0 for the ground, then one per entity part (a robot link; the single
-``main`` of an object or human, which every link of a URDF object maps to) -- the MuJoCo backend's numbering.
+Part ids, used by contacts, are: 0 for the ground, then one per entity part (a robot's or a person's link; the
+single ``main`` of an object, which every link of a URDF object maps to) -- the MuJoCo backend's numbering.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 from sigcore.backend import find_joint, find_part
 
@@ -22,6 +23,9 @@ BASE = -1
 #   dynamic           2|4    1|2|8    dynamic, static     yes
 #   static            8|4    1        dynamic             yes
 #   collision off     4      1        nothing             yes (as in the MuJoCo backend)
+#
+# A held person's links are "static" (see ``EntityIndex.still``): it touches what moves, not the ground, a static
+# object or another held person (contacts that would cost solver rows every step and push nothing).
 GROUP_DYNAMIC = 2 | 4
 MASK_DYNAMIC = 1 | 2 | 8
 GROUP_STATIC = 8 | 4
@@ -34,7 +38,7 @@ RAY_MASK = 4
 
 @dataclass
 class JointIndex:
-    """A movable joint of a robot and its drive.
+    """A movable joint of a robot or a person, and its drive (a person's joints have none).
 
     Attributes:
         index: PyBullet joint index (= the child link's index).
@@ -70,6 +74,8 @@ class EntityIndex:
         welded: The base is fixed in the world (static object, fixed robot).
         joints: Movable joints by URDF name, in URDF order.
         held0: Dynamics off at build (static humans).
+        rigid: A person built as a rigid mannequin (its joints fixed at their angles; see :mod:`.builder`).
+        still: A held person: every link collides as a static one (set by the backend when it holds it).
         local_pos: Inertial frame origin of the base in its link frame [m].
         local_orn: Its orientation ``(x, y, z, w)``.
         masses0: Mass [kg] of each link in ``links`` at build (what ``get_mass`` sums).
@@ -85,6 +91,8 @@ class EntityIndex:
     welded: bool
     joints: dict[str, JointIndex] = field(default_factory=dict)
     held0: bool = False
+    rigid: bool = False
+    still: bool = False
     local_pos: tuple[float, float, float] = (0.0, 0.0, 0.0)
     local_orn: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
     masses0: list[float] = field(default_factory=list)
@@ -94,9 +102,14 @@ class EntityIndex:
         """Collision filter ``(group, mask)`` of one of its links with collision on or off."""
         if not enabled:
             return GROUP_OFF, MASK_OFF
-        if link == BASE and self.welded:
+        if self.still or (link == BASE and self.welded):
             return GROUP_STATIC, MASK_STATIC
         return GROUP_DYNAMIC, MASK_DYNAMIC
+
+    @cached_property
+    def joint_indices(self) -> list[int]:
+        """The PyBullet indices of :attr:`joints`, in URDF order."""
+        return [j.index for j in self.joints.values()]
 
     @property
     def static(self) -> bool:

@@ -43,13 +43,21 @@ class BulletModes(BulletBase):
             self._nograv.add(e.name)
 
     def set_dynamics_mode(self, entity: str, enabled: bool) -> None:
-        """Dynamics off holds the base and every joint where they are now.
+        """Dynamics off holds the base and every joint where they are now. A person with dynamics on is a rigid
+        mannequin at its posture (a new body; see :mod:`.base`).
 
         Raises:
             BackendRefusal: enabling dynamics of a static object (PyBullet holds it with mass 0).
         """
         self._wake()
         e = self._entity(entity)
+        if e.kind == "human":
+            if enabled and e.name in self._posed:
+                self._rebuild_human(e, rigid=True)
+            elif not enabled:
+                self._hold(e)
+            self._tick += 1
+            return
         if e.static:
             if enabled:
                 raise BackendRefusal(f"{e.kind} '{e.name}' is static (static=\"true\" in the world file) and "

@@ -5,10 +5,11 @@ an image is drawn on the simulation's thread at the step it belongs to (the snap
 gives TinyRenderer an OpenGL view matrix from the optical frame and a projection matrix from the intrinsics (any
 principal point); depth is the depth buffer converted to distances along the optical axis.
 
-Bodies built without a visual shape (sigcore's objects and humans) are drawn from their collision shapes, and the
-URDFs' visuals are dropped (:mod:`.urdf_prep`); each link is given its colour in the scene description once, before
-the first image (:func:`sigcore.world.appearance.link_colors`; a shape its world-file colour), so the camera shows
-what the viewer shows.
+Bodies built without a visual shape (sigcore's objects) are drawn from their collision shapes, and the URDFs'
+visuals (robots', persons' generated ones) are dropped (:mod:`.urdf_prep`); each link is given its colour in the
+scene description once, before the first image (:func:`sigcore.world.appearance.link_colors`; a shape its
+world-file colour), so the camera shows what the viewer shows. A person whose body is built again (see
+:mod:`.base`) is painted again.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import pybullet as pb
 
 from sigcore.backend import CameraView, Image, Renderer
 from sigcore.world.appearance import link_colors
-from sigcore.world.models import Object, Robot
+from sigcore.world.models import Human, Object, Robot
 from sigcore.world.visuals import DEFAULT_COLOR
 
 if TYPE_CHECKING:
@@ -50,7 +51,9 @@ class BulletRenderer(Renderer):
 
     def __init__(self, backend: BulletBackend) -> None:
         self._backend = backend
-        self._coloured: set[str] = set()
+        self._coloured: dict[str, tuple[int, int]] = {}
+        """The entities painted, with the backend's build and the body painted (a reset may build the world again,
+        a person's body is replaced when it changes)."""
 
     def snapshot(self) -> object:
         """Nothing to copy: :meth:`render` is called at once, on the simulation's thread."""
@@ -59,12 +62,14 @@ class BulletRenderer(Renderer):
 
     def _colour(self) -> None:
         """Give each object's shape its world-file colour, and each link of a URDF its scene colour (once per
-        entity)."""
+        body)."""
         b = self._backend
         for agent in b._world.agents:  # the renderer is the backend's own: its world and bodies are read here
-            if agent.name in self._coloured or not isinstance(agent, Object | Robot):
+            if not isinstance(agent, Object | Robot | Human):
                 continue
             body = b._entity(agent.name).body
+            if self._coloured.get(agent.name) == (b._builds, body):
+                continue
             if isinstance(agent, Object) and agent.urdf is None:
                 pb.changeVisualShape(body, -1, rgbaColor=list(agent.color), physicsClientId=b.client)
             else:
@@ -75,7 +80,7 @@ class BulletRenderer(Renderer):
                 for index, link in links.items():
                     pb.changeVisualShape(body, index, rgbaColor=list(colors.get(link, DEFAULT_COLOR)),
                                          physicsClientId=b.client)
-            self._coloured.add(agent.name)
+            self._coloured[agent.name] = (b._builds, body)
 
     def render(self, snapshot: object, views: Sequence[CameraView]) -> list[tuple[Image | None, Image | None]]:
         out: list[tuple[Image | None, Image | None]] = []

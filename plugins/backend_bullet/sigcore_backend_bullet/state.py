@@ -58,10 +58,11 @@ class BulletState(BulletBase):
         return v, w
 
     def set_velocity(self, entity: str, linear: Array | None = None, angular: Array | None = None) -> None:
-        """Set the base's velocity (``resetBaseVelocity`` at its centre of mass); no effect if welded."""
+        """Set the base's velocity (``resetBaseVelocity`` at its centre of mass); no effect if welded or a held
+        person (its base is PyBullet's fixed base)."""
         self._wake()
         e = self._entity(entity)
-        if e.welded:
+        if e.welded or e.name in self._posed:
             return
         lin0, ang0 = self.get_velocity(entity)
         lin = np.asarray(linear, dtype=np.float64) if linear is not None else lin0
@@ -74,11 +75,12 @@ class BulletState(BulletBase):
         self._tick += 1
 
     def get_com(self, entity: str, part: str | None = None) -> Array:
-        """Centre of mass [m] of a robot link, or of a whole object or human (all its links)."""
+        """Centre of mass [m] of a robot link or a person's link, or of a whole object or person (all its links:
+        the part ``None`` or ``main``)."""
         e = self._entity(entity)
         link = e.link(part)
         c = self.client
-        if e.kind == "robot" or len(e.links) == 1:
+        if e.kind == "robot" or len(e.links) == 1 or link != BASE:
             return np.array(grasp.inertial_pose(c, e.body, link)[0], dtype=np.float64)
         masses = np.array(self._mass[entity])
         coms = np.array([grasp.inertial_pose(c, e.body, k)[0] for k in e.links])
@@ -86,11 +88,14 @@ class BulletState(BulletBase):
         return (masses @ coms) / total if total > 0 else coms[0]
 
     def apply_wrench(self, entity: str, part: str | None, force: Array, torque: Array) -> None:
-        """``applyExternalForce`` at the link's centre of mass and ``applyExternalTorque``, world frame."""
+        """``applyExternalForce`` at the link's centre of mass and ``applyExternalTorque``, world frame (nothing on a
+        held person)."""
         self._wake()
         e = self._entity(entity)
         link = e.link(part)
         c = self.client
+        if e.name in self._posed:
+            return
         if np.any(force):
             com = grasp.inertial_pose(c, e.body, link)[0]
             pb.applyExternalForce(e.body, link, [float(x) for x in force], com, pb.WORLD_FRAME, physicsClientId=c)

@@ -10,6 +10,8 @@ The preparations work on a copy of the world's shared parsed URDF (``World.urdf`
   ``<inertial>``: the masses are the URDF's, nothing is inferred from geometry.
 * Link friction from ``<gazebo reference="link"><mu1>`` (or ``<mu>``), else ``<contact><lateral_friction>``,
   is returned per link; it is applied with ``changeDynamics`` after loading.
+* A person's generated URDF (:mod:`sigcore.world.body`) is loaded with its revolute joints made ``continuous``
+  (held: kinematic) or ``fixed`` at their angles (dynamic: a rigid mannequin), see :func:`pose_joints`.
 """
 
 from __future__ import annotations
@@ -18,10 +20,12 @@ import os
 import tempfile
 from dataclasses import dataclass
 
+import numpy as np
 from lxml import etree
 
 from sigcore.backend import collision_urdf
 from sigcore.errors import BackendError
+from sigcore.geometry import quat_from_axis_angle, quat_from_rpy, quat_mul, quat_to_rpy
 from sigcore.world.meshes import mesh_problem
 from sigcore.world.urdf import UrdfDocument, link_friction
 
@@ -86,3 +90,43 @@ def write_temp(text: str) -> str:
     with os.fdopen(fd, "w") as f:
         f.write(text)
     return name
+
+
+def pose_joints(text: str, angles: dict[str, float] | None) -> str:
+    """A person's prepared URDF ``text`` with its revolute joints made kinematic or rigid.
+
+    Args:
+        text: The prepared URDF (:attr:`PreparedUrdf.text`).
+        angles: ``None``: every revolute joint becomes ``continuous`` (no limit constraint: a held person's angles
+            are set, never simulated, and PyBullet's limit rows cost more than its dynamics). Otherwise each
+            revolute joint becomes ``fixed`` at its angle [rad] here (0 if absent): the origin's rotation is
+            composed with the rotation about the joint's axis, so every link keeps the pose it has at that angle
+            and the body is one rigid multibody (a mannequin).
+    """
+    root = etree.fromstring(text.encode())
+    for joint in root.findall("joint"):
+        if joint.get("type") not in ("revolute", "continuous"):
+            continue
+        if angles is None:
+            joint.set("type", "continuous")
+            for limit in joint.findall("limit"):
+                joint.remove(limit)
+            continue
+        origin = joint.find("origin")
+        if origin is None:
+            origin = etree.SubElement(joint, "origin")
+        axis_element = joint.find("axis")
+        axis = _floats(axis_element.get("xyz") if axis_element is not None else None, (1.0, 0.0, 0.0))
+        rpy = _floats(origin.get("rpy"), (0.0, 0.0, 0.0))
+        turned = quat_mul(quat_from_rpy(*rpy), quat_from_axis_angle(np.array(axis), angles.get(str(joint.get("name")),
+                                                                                                 0.0)))
+        origin.set("rpy", " ".join(repr(float(v)) for v in quat_to_rpy(turned)))
+        joint.set("type", "fixed")
+        for child in joint.findall("axis") + joint.findall("limit") + joint.findall("dynamics"):
+            joint.remove(child)
+    return etree.tostring(root, encoding="unicode")
+
+
+def _floats(text: str | None, default: tuple[float, float, float]) -> tuple[float, float, float]:
+    values = [float(v) for v in text.split()] if text else []
+    return (values[0], values[1], values[2]) if len(values) == 3 else default

@@ -106,7 +106,7 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
         self._pose_rows = {}
         self._contact_map = ContactMap(layout.geom_part, layout.part_entity)
         self._scratch = None
-        self._servos = [j.servo for e in self._entities.values() for j in e.joints.values()]
+        self._servos = [j.servo for e in self._entities.values() for j in e.joints.values() if j.servo is not None]
 
     def _restart(self) -> None:
         """Initial state on the current model (after build or reset)."""
@@ -247,10 +247,15 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
         for name, e in self._entities.items():
             before = old_entities.get(name)
             for joint, j in e.joints.items():
+                servo = j.servo
+                if servo is None:
+                    continue
                 if before is None:
-                    j.servo.restart(model, data)
+                    servo.restart(model, data)
                 else:
-                    j.servo.mode, j.servo.torque = before.joints[joint].servo.mode, before.joints[joint].servo.torque
+                    old_servo = before.joints[joint].servo
+                    assert old_servo is not None
+                    servo.mode, servo.torque = old_servo.mode, old_servo.torque
         self._hold = data.qpos.copy()
         for name in self._held & set(self._entities):
             self._hold[self._entities[name].qpos] = old_hold[old_entities[name].qpos]
@@ -280,7 +285,7 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
         return list(self._entity(entity).parts)
 
     def joints(self, entity: str) -> list[str]:
-        """Movable joints of a robot in URDF order; empty for objects and humans."""
+        """Movable joints of a robot or a person in URDF order; empty for objects."""
         return list(self._entity(entity).joints)
 
     # ------------------------------------------------------------------ grasping

@@ -60,6 +60,13 @@ class MujocoBase(Backend):
         self._hold_views = _views(self.data.qpos, self._held_qpos), _views(self.data.qvel, self._held_dofs)
         self._post = bool(self._held_qpos.size) or self._applied
 
+    def _lock_joints(self, e: EntityIndex, active: bool) -> None:
+        """Switch a person's joint locks (its dynamics on: a mannequin whose joints keep their angles)."""
+        for j in e.joints.values():
+            if j.lock >= 0:
+                self.model.eq_data[j.lock, 0] = self.data.qpos[j.qpos]
+                self.data.eq_active[j.lock] = 1 if active else 0
+
     def _update_hold(self, e: EntityIndex) -> None:
         if e.name in self._held:
             self._hold[e.qpos] = self.data.qpos[e.qpos]

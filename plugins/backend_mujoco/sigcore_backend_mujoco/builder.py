@@ -5,7 +5,10 @@ Layout of the spec:
 * the ground: a plane at z = 0 in the world body (entity ``ground``), and a directional light;
 * an object: body ``<name>/main`` at its pose (a primitive or mesh geom), or its URDF attached at its pose; a
   free joint unless ``static`` (then the body is welded to the world);
-* a human: body ``<name>/main`` with its frame at the feet, a capsule and a sphere head, a free joint;
+* a human: its generated URDF (:mod:`sigcore.world.body`: REP-155 links, capsules, spheres and feet boxes) attached
+  at its pose with prefix ``<name>/``, root body ``<name>/main`` at the feet, a free joint; no actuators (its
+  joints are held where ``set_joint_angle`` puts them, see :mod:`.backend`), and per joint a joint equality
+  ``lock:<name>:<joint>`` that holds the angle while the person is dynamic (a mannequin); no self-collision;
 * a robot: its URDF attached at its pose with prefix ``<name>/`` (bodies keep the URDF link names), a free
   joint on the root link unless ``fixed``; an integrator servo per arm joint, and per drive wheel a hidden
   motor body ``motor:<robot>:<joint>`` with a friction tendon (see :mod:`.servo`); no self-collision (every
@@ -31,12 +34,11 @@ from itertools import combinations
 import mujoco
 import numpy as np
 
+from sigcore.backend import entity_urdf
 from sigcore.errors import BackendError
 from sigcore.geometry import quat_from_rpy
-from sigcore.world.appearance import HUMAN_COLOR, Color, human_dimensions, link_colors
-from sigcore.world.exceptions import UrdfError
+from sigcore.world.appearance import Color, link_colors
 from sigcore.world.models import Human, Object, Pose, Robot, World
-from sigcore.world.urdf import UrdfDocument
 from sigcore.world.visuals import DEFAULT_COLOR
 
 from .plan import (
@@ -47,6 +49,7 @@ from .plan import (
     EntityPlan,
     JointPlan,
     WeldPlan,
+    lock_name,
     prefix,
 )
 from .servo import MOTOR_ARMATURE, motor_name
@@ -120,7 +123,7 @@ def _add_entity(spec: mujoco.MjSpec, world: World, entity: Robot | Object | Huma
     if isinstance(entity, Robot):
         return _add_robot(spec, world, entity)
     if isinstance(entity, Human):
-        return _add_human(spec, entity)
+        return _add_human(spec, world, entity)
     if entity.urdf is not None:
         return _add_urdf_object(spec, world, entity)
     return _add_shape_object(spec, world, entity)
@@ -189,11 +192,8 @@ def _exclude_self(spec: mujoco.MjSpec, root: mujoco.MjsBody) -> None:
 # ---------------------------------------------------------------------------------------------------- robots
 def _add_robot(spec: mujoco.MjSpec, world: World, robot: Robot) -> EntityPlan:
     what = f"robot '{robot.name}'"
-    document = _document(world, robot.name, what)
-    try:
-        urdf = document.model
-    except UrdfError as e:
-        raise BackendError(f"{what}: {e}") from None
+    document = entity_urdf(world, robot.name, what)
+    urdf = document.model
     loaded = load_urdf(document, what)
     root = _attach(spec, loaded.spec, robot.name, robot.pose, free=not robot.fixed)
     _style(root, loaded.friction, None, link_colors(world, robot))
@@ -216,14 +216,6 @@ def _add_robot(spec: mujoco.MjSpec, world: World, robot: Robot) -> EntityPlan:
     p = prefix(robot.name)
     parts = [(urdf.root, p + urdf.root)] + [(link, p + link) for link in urdf.links if link != urdf.root]
     return EntityPlan(robot.name, "robot", parts, free=not robot.fixed, joints=joints)
-
-
-def _document(world: World, entity: str, what: str) -> UrdfDocument:
-    """The world's shared URDF of ``entity``; ``BackendError`` naming the entity if it cannot be read."""
-    try:
-        return world.urdf(entity)
-    except UrdfError as e:
-        raise BackendError(f"{what}: {e}") from None
 
 
 def _attach(spec: mujoco.MjSpec, child: mujoco.MjSpec, name: str, pose: Pose, free: bool) -> mujoco.MjsBody:
@@ -270,7 +262,7 @@ def _add_motor(spec: mujoco.MjSpec, robot: str, joint: JointPlan) -> None:
 def _add_urdf_object(spec: mujoco.MjSpec, world: World, obj: Object) -> EntityPlan:
     assert obj.urdf is not None
     what = f"object '{obj.name}'"
-    loaded = load_urdf(_document(world, obj.name, what), what, obj.scale)
+    loaded = load_urdf(entity_urdf(world, obj.name, what, tree=False), what, obj.scale)
     root = _attach(spec, loaded.spec, obj.name, obj.pose, free=not obj.static)
     _style(root, loaded.friction, obj.friction, link_colors(world, obj))
     _exclude_self(spec, root)
@@ -314,19 +306,23 @@ def _primitive(shape: str, size: tuple[float, ...]) -> tuple[mujoco.mjtGeom, lis
     return _GEOM.mjGEOM_CAPSULE, [size[0], size[1] / 2, 0.0]
 
 
-def _add_human(spec: mujoco.MjSpec, human: Human) -> EntityPlan:
-    pos, quat = _frame(human.pose)
-    name = prefix(human.name) + "main"
-    body = spec.worldbody.add_body(name=name, pos=pos, quat=quat)
-    body.add_freejoint(name=prefix(human.name) + FREE_JOINT)
-    r_body, r_head, top = human_dimensions(human.height)
-    style = dict(group=GROUP_COLLISION, contype=NORMAL[0], conaffinity=NORMAL[1], priority=ENTITY_PRIORITY,
-                 rgba=list(HUMAN_COLOR))
-    body.add_geom(name=name, type=_GEOM.mjGEOM_CAPSULE, fromto=[0, 0, r_body, 0, 0, top - r_body],
-                  size=[r_body, 0, 0], mass=0.92 * human.mass, **style)
-    body.add_geom(name=prefix(human.name) + "head", type=_GEOM.mjGEOM_SPHERE, pos=[0, 0, top + r_head],
-                  size=[r_head, 0, 0], mass=0.08 * human.mass, **style)
-    return EntityPlan(human.name, "human", [("main", name)], free=True, held=human.static)
+def _add_human(spec: mujoco.MjSpec, world: World, human: Human) -> EntityPlan:
+    what = f"human '{human.name}'"
+    document = entity_urdf(world, human.name, what)
+    loaded = load_urdf(document, what)
+    root = _attach(spec, loaded.spec, human.name, human.pose, free=True)
+    _style(root, loaded.friction, 1.0, link_colors(world, human))
+    _exclude_self(spec, root)
+    urdf = document.model
+    joints = [JointPlan(j.name, False, 0.0, 0.0, 0.0, (j.lower, j.upper) if j.lower is not None and
+                        j.upper is not None else None, passive=True) for j in urdf.movable_joints]
+    p = prefix(human.name)
+    for j in joints:  # a dynamic person's joints are locked by these (a mannequin); a held one needs none
+        spec.add_equality(name=lock_name(human.name, j.name), type=mujoco.mjtEq.mjEQ_JOINT,
+                          objtype=mujoco.mjtObj.mjOBJ_JOINT, name1=p + j.name, active=not human.static,
+                          data=[0.0] * mujoco.mjNEQDATA)
+    parts = [(urdf.root, p + urdf.root)] + [(link, p + link) for link in urdf.links if link != urdf.root]
+    return EntityPlan(human.name, "human", parts, free=True, held=human.static, joints=joints)
 
 
 # ----------------------------------------------------------------------------------------------- grasp welds

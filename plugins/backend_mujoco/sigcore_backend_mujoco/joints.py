@@ -1,8 +1,9 @@
-"""Joint angles, velocities, servo targets and torques of :class:`~.backend.MujocoBackend`'s robots (a mixin)."""
+"""Joint angles, velocities, servo targets and torques of :class:`~.backend.MujocoBackend`'s robots and people (a
+mixin; a person's joints have no actuator: only their angles are set)."""
 
 from __future__ import annotations
 
-from sigcore.backend import Array
+from sigcore.backend import Array, passive_joint
 from sigcore.errors import BackendRefusal
 
 from .base import MujocoBase
@@ -24,6 +25,8 @@ class MujocoJoints(MujocoBase):
         self.data.qvel[j.dof] = 0.0
         if isinstance(j.servo, ArmServo):
             j.servo.hold(self.model, self.data, angle)
+        if j.lock >= 0:  # a person's joint: its lock (active while the person is dynamic) holds the new angle
+            self.model.eq_data[j.lock, 0] = angle
         self._update_hold(e)
         self._tick += 1
 
@@ -39,6 +42,8 @@ class MujocoJoints(MujocoBase):
         """
         e = self._entity(entity)
         j = e.joint(joint)
+        if j.servo is None:
+            raise BackendRefusal(passive_joint(entity, joint))
         if not isinstance(j.servo, ArmServo):
             arms = [n for n, x in e.joints.items() if isinstance(x.servo, ArmServo)]
             raise BackendRefusal(f"joint '{joint}' of '{entity}' is a drive wheel, always velocity-controlled: "
@@ -50,11 +55,15 @@ class MujocoJoints(MujocoBase):
                            max_torque: float | None = None) -> None:
         """Velocity mode at ``velocity``, limited to ``max_torque`` (default: the drive's or the gains')."""
         j = self._entity(entity).joint(joint)
+        if j.servo is None:
+            raise BackendRefusal(passive_joint(entity, joint))
         j.servo.drive(self.model, self.data, velocity, max_torque)
 
     def add_joint_torque(self, entity: str, joint: str, torque: float) -> None:
         """Add to ``qfrc_applied`` of the joint's dof for the next step."""
         j = self._entity(entity).joint(joint)
+        if j.servo is None:
+            raise BackendRefusal(passive_joint(entity, joint))
         self.data.qfrc_applied[j.dof] += torque
         self._applied = self._post = True
 

@@ -1,8 +1,8 @@
 """Index arrays of the compiled model, computed once at build so that per-step work is numpy slicing.
 
 Every MuJoCo body belongs to one entity (its name is ``<entity>/...``) or to the world (the ground). Part ids,
-used by contacts, are: 0 for the ground, then one per entity part (a robot link; the single ``main`` of an
-object or human, which every body of a URDF object maps to).
+used by contacts, are: 0 for the ground, then one per entity part (a robot's or a person's link; the single
+``main`` of an object, which every body of a URDF object maps to).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy.typing as npt
 
 from sigcore.backend import GROUND, MAIN, find_joint, find_part
 
-from .plan import EntityPlan, WeldPlan, prefix
+from .plan import EntityPlan, WeldPlan, lock_name, prefix
 from .servo import POSITION, ArmServo, Drive, WheelMotor, motor_name
 
 Ints = npt.NDArray[np.int64]
@@ -32,13 +32,15 @@ class JointIndex:
         jnt: Joint id.
         qpos: Its qpos address.
         dof: Its dof (qvel) address.
-        servo: Its drive: an arm servo or a wheel motor.
+        servo: Its drive: an arm servo or a wheel motor; None for a person's joint (no actuator, held).
+        lock: A person's joint: the equality that holds its angle while the person is dynamic; -1 otherwise.
     """
 
     jnt: int
     qpos: int
     dof: int
-    servo: Drive
+    servo: Drive | None
+    lock: int = -1
 
 
 @dataclass
@@ -57,7 +59,7 @@ class EntityIndex:
         free_dof: dof address of its free joint, -1 if welded.
         qpos: (Q,) qpos addresses of all its joints.
         dofs: (D,) dof addresses of all its joints.
-        joints: Actuated joints by URDF name, in URDF order.
+        joints: Movable joints by URDF name, in URDF order (a robot's actuated ones, a person's passive ones).
         held0: Dynamics off at build (static humans).
     """
 
@@ -127,10 +129,10 @@ def index_model(model: mujoco.MjModel, plans: list[EntityPlan], welds: list[Weld
             body_part[part_body[part]] = len(part_table)
             part_table.append((plan.name, part))
             part_entity.append(number)
-        if plan.kind != "robot":
+        if plan.kind == "object":
             body_part[bodies] = main_id  # every body of a (URDF) object is its main part
         root = part_body[plan.parts[0][0]]
-        if plan.kind == "robot":
+        if plan.kind != "object":
             part_body[MAIN] = root
         entities[plan.name] = _entity(model, plan, bodies, part_body, root)
     geom_part = body_part[model.geom_bodyid]
@@ -156,15 +158,18 @@ def _entity(model: mujoco.MjModel, plan: EntityPlan, bodies: Ints, part_body: di
         name = prefix(plan.name) + jp.name
         jnt = model.joint(name).id
         qa, da = int(model.jnt_qposadr[jnt]), int(model.jnt_dofadr[jnt])
-        servo: Drive
-        if jp.wheel:
+        servo: Drive | None
+        lock = -1
+        if jp.passive:
+            servo, lock = None, model.equality(lock_name(plan.name, jp.name)).id
+        elif jp.wheel:
             motor = motor_name(plan.name, jp.name)
             servo = WheelMotor(int(model.jnt_dofadr[model.joint(motor).id]), model.tendon(motor).id,
                                jp.max_torque, jp.max_torque)
         else:
             act = model.actuator(name).id
             servo = ArmServo(act, int(model.actuator_actadr[act]), qa, jp.max_torque, POSITION, jp.max_torque)
-        joints[jp.name] = JointIndex(jnt, qa, da, servo)
+        joints[jp.name] = JointIndex(jnt, qa, da, servo, lock)
     geoms = np.flatnonzero(np.isin(model.geom_bodyid, bodies)).astype(np.int64)
     return EntityIndex(plan.name, plan.kind, [p for p, _ in plan.parts], part_body, root, bodies, geoms,
                        free_qpos, free_dof, np.array(qpos, dtype=np.int64), np.array(dofs, dtype=np.int64),

@@ -36,7 +36,8 @@ class MujocoModes(MujocoBase):
         m.flg_gravcomp = bool(np.any(m.body_gravcomp))
 
     def set_dynamics_mode(self, entity: str, enabled: bool) -> None:
-        """Dynamics off holds every joint of the entity (free joint included) where it is now.
+        """Dynamics off holds every joint of the entity (free joint included) where it is now; a person's dynamics on
+        locks its joints at their angles (joint equalities: a mannequin whose root is free).
 
         Raises:
             BackendRefusal: enabling dynamics of a static object (it has no joints).
@@ -54,6 +55,7 @@ class MujocoModes(MujocoBase):
             self._hold[e.qpos] = self.data.qpos[e.qpos]
             self.data.qvel[e.dofs] = 0.0
             self._tick += 1
+        self._lock_joints(e, enabled)
         self._rebuild_held()
 
     def set_collision_mode(self, entity: str, enabled: bool) -> None:

@@ -60,6 +60,8 @@ class JointPlan:
     kv: float
     max_torque: float
     limits: tuple[float, float] | None = None
+    passive: bool = False
+    """A person's joint: no actuator; moved by ``set_joint_angle`` and held there (kinematic)."""
 
 
 @dataclass
@@ -72,7 +74,7 @@ class EntityPlan:
         parts: ``(part name, body name)``, main part first.
         free: Has a free joint (dynamic entities); otherwise the root body is welded to the world.
         held: Starts with dynamics off (a static human).
-        joints: Actuated joints (robots), in URDF order.
+        joints: Movable joints in URDF order: a robot's actuated ones, a person's passive ones.
         total_mass: Scale the masses to this total [kg] after compiling (URDF objects given a ``mass``).
     """
 
@@ -100,3 +102,8 @@ class WeldPlan:
     part: str
     obj: str
     name: str
+
+
+def lock_name(person: str, joint: str) -> str:
+    """The joint equality that locks joint ``joint`` of ``person`` while the person is dynamic."""
+    return f"lock:{person}:{joint}"

@@ -177,6 +177,8 @@ class StandardEndpoints:
         # one /tf message: odom -> root of each robot under its odometry, then each robot's joints (Frames.moving)
         pairs = [(self.prefix[odo.robot] + "odom", self.base[odo.robot]) for odo, _, _, tf in self._odom if tf]
         pairs += [pair for name in self.joints for pair in frames.moving(name)]
+        self._people = frames.people
+        pairs += [pair for name in self._people for pair in frames.moving(name)]
         self._tf = _transforms(pairs) if pairs else None
         self._joint_states = [(name, joints, self.joint_pub[name], _joint_state(joints), bool(frames.moving(name)))
                               for name, joints in self.joints.items()]
@@ -277,7 +279,7 @@ class StandardEndpoints:
 
     def publish_state(self, entities: bool = True) -> None:
         """odom and joint_states of every robot, and their transforms on /tf (odom -> base_link, every movable
-        joint, free roots) in one message, stamped with the current step.
+        joint, free roots; each person's feet and links) in one message, stamped with the current step.
 
         The messages are serialized templates (:class:`CdrTemplate`) in which only the stamp, the pose, the
         velocities and the joint values are rewritten; the joint transforms are computed by the core
@@ -304,6 +306,9 @@ class StandardEndpoints:
             if moving:
                 for _, _, (x, y, z), (w, qx, qy, qz) in transforms(name, positions):
                     poses += (sec, nanosec, x, y, z, qx, qy, qz, w)
+        for name in self._people:  # each person's feet and links (REP-155 frames), at the backend's joint angles
+            for _, _, (x, y, z), (w, qx, qy, qz) in transforms(name):
+                poses += (sec, nanosec, x, y, z, qx, qy, qz, w)
         if self._tf is not None:
             self._send(self.tf_pub, self._tf.pack(*poses))
         if entities and self._entity_tf is not None:

@@ -144,14 +144,17 @@ class Object(_Model):
 
 
 class Human(_Model):
-    """``<human>``: a person, modelled as a standing capsule with a head (kinematic unless told otherwise)."""
+    """``<human>``: a person: an articulated body with REP-155's links and joints, sized from ``height``
+    (:mod:`sigcore.world.body`), held kinematically (``static``, the default) or a mannequin whose joints keep
+    their angles."""
 
     kind: Literal["human"] = "human"
     name: Name = Field(description="unique agent name; prefixes its ROS 2 topics")
     pose: PoseField = Field(default=Pose(), description="'x y z' [m] or 'x y z roll pitch yaw' [m, rad]")
     height: float = Field(default=1.7, gt=0.3, le=2.5, description="in [m]")
     mass: float = Field(default=70.0, gt=0, le=500, description="in [kg]")
-    static: bool = Field(default=True, description="held in place (moved only through the API)")
+    static: bool = Field(default=True, description="held kinematically (moved only through the API, never pushed "
+                                                   "over); false: a mannequin that falls and topples")
     controller: str | None = Field(default=None, description=_CONTROLLER)
     tags: EntityTags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
     description: Description = Field(default="", description="human-readable description (get_entity_info)")

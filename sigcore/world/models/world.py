@@ -9,10 +9,11 @@ from pathlib import Path
 
 from pydantic import Field, PrivateAttr, field_validator
 
+from ..body import human_body, human_urdf
 from ..limits import MAX_COORDINATE, check_magnitudes
 from ..randomization import Located, Randomize
 from ..urdf import UrdfDocument, UrdfFiles
-from .agents import AgentModel, BareAgent, Entity, Object, Robot
+from .agents import AgentModel, BareAgent, Entity, Human, Object, Robot
 from .base import Description, EntityTags, Name, PoseField, Vec3, Vec6, _Model
 
 MAX_GRAVITY = 1000.0
@@ -145,10 +146,15 @@ class World(_Model):
         """
         if isinstance(what, Path):
             return self._urdfs.get(self.resolve(what))
-        with_urdf = [a.name for a in self.agents if isinstance(a, Robot | Object) and a.urdf is not None]
+        with_urdf = [a.name for a in self.agents
+                     if isinstance(a, Human) or (isinstance(a, Robot | Object) and a.urdf is not None)]
         agent = next((a for a in self.agents if a.name == what), None)
         if agent is None:
             raise KeyError(f"no agent '{what}'; agents with a URDF: {', '.join(with_urdf) or 'none'}")
+        if isinstance(agent, Human):
+            return self._urdfs.generated(("human", agent.height, agent.mass),
+                                         Path(f"<body of a {agent.height:g} m person>.urdf"),
+                                         lambda: human_urdf(human_body(agent.height, agent.mass)))
         if not isinstance(agent, Robot | Object) or agent.urdf is None:
             raise KeyError(f"agent '{what}' has no URDF; agents with one: {', '.join(with_urdf) or 'none'}")
         return self._urdfs.get(self.resolve(agent.urdf))

@@ -206,7 +206,7 @@ def load(path: Path, workdir: Path, stop: Callable[[], bool] | None = None) -> R
         layout = layout_of(sim)
         base = sim.backend.get_poses(layout.parts) if layout.parts else np.empty((0, 7))
         kinds = {name: sim.entities[name].kind for name in sim.entities.names if name in sim.entities}
-        robots = {name for name, kind in kinds.items() if kind == "robot"}
+        robots = {name for name, kind in kinds.items() if kind in ("robot", "human")}  # entities with link frames
         shown = [p for p in sim.publications.declared if p.display is not None]
         overlays = [p for p in sim.publications.declared if p.msg_type in (_SCAN, _GRID)]
         dt_ns = round(sim.dt * 1e9)
@@ -249,8 +249,8 @@ def _files(info: Any) -> str:
 
 
 def _truth_name(entity: str, part: str | None, frame: str, robots: set[str]) -> str | None:
-    """The ground truth's child frame of a layout's frame: each frame of a robot, the one frame of any other
-    entity (:func:`sigcore.record.recorder.truth_frame`)."""
+    """The ground truth's child frame of a layout's frame: each frame of a robot or a person, the one frame of an
+    object (:func:`sigcore.record.recorder.truth_frame`)."""
     from sigcore.record.recorder import truth_frame
 
     if entity not in robots and part is not None:
