@@ -324,6 +324,12 @@ class Backend(ABC):
     def set_joint_angle(self, entity: str, joint: str, angle: float) -> None:
         """Set a joint position instantly (kinematic); its position servo then holds that angle."""
 
+    def set_joint_angles(self, entity: str, angles: Mapping[str, float]) -> None:
+        """:meth:`set_joint_angle` of every ``joint: angle`` in ``angles`` (a person's posture at one step); a
+        backend may do it in one go."""
+        for joint, angle in angles.items():
+            self.set_joint_angle(entity, joint, angle)
+
     @abstractmethod
     def get_joint_velocity(self, entity: str, joint: str) -> float:
         """Joint velocity [rad/s] or [m/s]."""

@@ -3,12 +3,12 @@ at which it took effect, so that a run can be re-simulated exactly (``sigcore re
 
 The simulation is deterministic and applies commands only between steps: a transport runs what its clients send
 when it is serviced, a viewer what a person does. Every such command goes through a verb of :class:`Inputs`
-(``sim.inputs``, the one owner of the log: :meth:`~Inputs.base_velocity`, :meth:`~Inputs.wheel_velocity`,
-:meth:`~Inputs.message`, :meth:`~Inputs.entity_state`, :meth:`~Inputs.entity_info`, :meth:`~Inputs.spawn`,
-:meth:`~Inputs.delete`, :meth:`~Inputs.load_world`, :meth:`~Inputs.unload_world`), or through the API table
-(:func:`sigcore.api.call`) or :meth:`Simulation.reset`, which note themselves: the core applies the command and notes
-it, whichever client applied it, so a new transport cannot forget to. A recorder subscribes to the ``input`` channel
-of ``sim.events`` and keeps them.
+(``sim.inputs``, the one owner of the log: :meth:`~Inputs.base_velocity`, :meth:`~Inputs.person_velocity`,
+:meth:`~Inputs.wheel_velocity`, :meth:`~Inputs.message`, :meth:`~Inputs.entity_state`, :meth:`~Inputs.entity_info`,
+:meth:`~Inputs.spawn`, :meth:`~Inputs.delete`, :meth:`~Inputs.load_world`, :meth:`~Inputs.unload_world`), or through
+the API table (:func:`sigcore.api.call`) or :meth:`Simulation.reset`, which note themselves: the core applies the
+command and notes it, whichever client applied it, so a new transport cannot forget to. A recorder subscribes to the
+``input`` channel of ``sim.events`` and keeps them.
 A command noted at step ``k`` (``sim.step_count``) took effect after step ``k``'s physics and before step ``k + 1``'s:
 a replay applies it there (:meth:`Inputs.apply`), before stepping on.
 
@@ -17,6 +17,7 @@ Kinds (``Input.kind``) and their arguments:
 - ``api``: an API table entry called through :func:`sigcore.api.call` (a sig_ros topic or service, a viewer's drag):
   ``agent``, ``entry`` (the suffix, e.g. ``_grasp_obj``), ``request`` (the validated request's fields);
 - ``base_velocity``: a drive's ``cmd_vel``: ``robot``, ``linear`` [m/s], ``angular`` [rad/s];
+- ``person_velocity``: a person's walk (``/<person>/cmd_vel``): ``person``, ``linear`` [m/s], ``angular`` [rad/s];
 - ``wheel_velocity``: wheels set directly (a ``cmd_vel`` timeout stops them): ``robot``, ``left``, ``right``;
 - ``message``: a text message sent to an agent from outside (the viewer): ``sender``, ``to``, ``text``;
 - ``reset``: :meth:`Simulation.reset`: ``despawn``;
@@ -55,8 +56,8 @@ if TYPE_CHECKING:
     from .info import EntityInfo
     from .simulation import Simulation
 
-REPLAYED = ("api", "base_velocity", "wheel_velocity", "message", "reset", "entity_state", "spawn", "delete",
-            "entity_info")
+REPLAYED = ("api", "base_velocity", "person_velocity", "wheel_velocity", "message", "reset", "entity_state", "spawn",
+            "delete", "entity_info")
 """The kinds :meth:`Inputs.apply` reproduces."""
 
 _NEEDED = {"spawn": "requests", "delete": "entities", "entity_info": "category"}
@@ -148,6 +149,15 @@ class Inputs:
         self._sim.robot(robot).set_base_velocity(linear, angular)
         self.note("base_velocity", robot=robot, linear=linear, angular=angular)
 
+    def person_velocity(self, person: str, linear: float, angular: float) -> None:
+        """Walk ``person`` (a ``/<person>/cmd_vel``): ``linear`` [m/s], ``angular`` [rad/s] (``sim.entities.people``).
+
+        Raises:
+            ApiError: no such person, or a value out of range or not finite (nothing noted then).
+        """
+        self._sim.entities.people.walk(person, linear, angular)
+        self.note("person_velocity", person=person, linear=linear, angular=angular)
+
     def wheel_velocity(self, robot: str, left: float, right: float) -> None:
         """Set ``robot``'s wheel velocities directly [rad/s] (a ``cmd_vel`` timeout stops them so)."""
         self._sim.robot(robot).set_wheel_velocity(left, right)
@@ -227,6 +237,8 @@ class Inputs:
             return (entry, a["agent"], result) if isinstance(result, Deferred) else None
         if item.kind == "base_velocity":
             self.base_velocity(a["robot"], a["linear"], a["angular"])
+        elif item.kind == "person_velocity":
+            self.person_velocity(a["person"], a["linear"], a["angular"])
         elif item.kind == "wheel_velocity":
             self.wheel_velocity(a["robot"], a["left"], a["right"])
         elif item.kind == "message":

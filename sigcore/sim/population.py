@@ -2,9 +2,9 @@
 
 :class:`Entities` is a read-only mapping ``name -> handle`` (``SimObj`` / ``RobotObj``) in world order, and the one
 owner of the per-entity state that spawning and deleting change: models, URDFs, drives, lidars, wheel odometry,
-namespaces, graspable objects, modes, information, grasps, owners, contacts and controllers. :meth:`Entities.spawn`
-resolves requests (``sigcore.world.resources``), :meth:`Entities.add` and :meth:`Entities.delete` change every owner
-at once, then emit ``scene`` and ``entities`` on the event hub.
+namespaces, graspable objects, modes, information, grasps, owners, contacts, controllers and people's motion.
+:meth:`Entities.spawn` resolves requests (``sigcore.world.resources``), :meth:`Entities.add` and
+:meth:`Entities.delete` change every owner at once, then emit ``scene`` and ``entities`` on the event hub.
 """
 
 from __future__ import annotations
@@ -40,6 +40,7 @@ from .lidar import LidarSensor
 from .modes import Mode, Modes
 from .odometry import WheelOdometry
 from .owners import Owners
+from .people import People
 from .spawn import EntityChange
 
 if TYPE_CHECKING:
@@ -96,6 +97,8 @@ class Entities(Mapping[str, SimObj]):
         """Who owns which part (``SimObj.set_owner``)."""
         self.controllers = Dispatcher(dt)
         """The agents' controllers and their callbacks (``sigcore.sim.dispatch``)."""
+        self.people = People(sim, world.entities)
+        """What moves each person (``sigcore.sim.people``: walking by velocity)."""
         self._spawn_dir: Path | None = None
 
     def _handle(self, model: AgentModel) -> SimObj:
@@ -354,6 +357,7 @@ class Entities(Mapping[str, SimObj]):
             if isinstance(model, Object) and model.graspable:
                 self._graspable.append(model.name)
         self.lidars = tuple(lidars)
+        self.people.add(models)
         self.info.add(models)
         self._modes.add(models)
         self._refresh_contacts()
@@ -410,6 +414,7 @@ class Entities(Mapping[str, SimObj]):
         self.world = world
         self.lidars = tuple(lidar for lidar in self.lidars if lidar.robot not in gone)
         self.info.remove(names)
+        self.people.remove(names)
         self._modes.remove(names)
         self.owners.forget(gone)
         self._refresh_contacts()
@@ -440,7 +445,7 @@ class Entities(Mapping[str, SimObj]):
 
     def reset(self) -> None:
         """The per-entity state back to the world file's (after the backend's reset): no grasps or owners, modes and
-        information as loaded, no contact episode, odometry and drives at their start."""
+        information as loaded, no contact episode, odometry and drives at their start, everyone standing."""
         self.grasps.clear()
         self.owners.clear()
         self._modes.reset()
@@ -450,3 +455,4 @@ class Entities(Mapping[str, SimObj]):
             odo.reset()
         for drive in self._drives.values():
             drive.reset()
+        self.people.reset()

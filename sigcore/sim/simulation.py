@@ -102,6 +102,7 @@ class Simulation:
         for publication in self._publications.declared:
             self._publications.withdraw(publication.topic)
         self._features.detach_all()
+        self._entities.people.close()
         self._topics.close()
         self._cameras.close()
         self._backend.close()

@@ -166,6 +166,19 @@ def test_cmd_vel_drives_odom_and_tf_follow(sim_proc: SimProcess) -> None:
     assert all(abs(c / DT - round(c / DT)) < 1e-6 for c in clock)
 
 
+def test_cmd_vel_walks_a_person_whose_frames_follow(sim_proc: SimProcess) -> None:
+    """Twist on /man/cmd_vel from another process walks the person forward (its knees bend and straighten on /tf);
+    a speed out of range is refused and the walk goes on; without messages it stands after 0.5 s."""
+    out = sim_proc.client("walk.py")
+    dx, dy = out["walked"][0] - out["start"][0], out["walked"][1] - out["start"][1]
+    assert dx > 0.6 and abs(dy) < 1e-6  # 0.8 m/s for about 1.5 s of real (= simulated) time
+    assert out["after_refusal"][0] > out["walked"][0]  # still walking at 0.8 m/s
+    assert out["still"] == out["stood"]
+    knees = out["knees"]
+    assert len(knees) > 5 and max(knees) - min(knees) > 0.1
+    assert {"l_knee_man", "r_ankle_man", "p_head_man", "man"} <= set(out["frames"])  # movable joints' children
+
+
 def test_joint_states_scan_and_static_frames(sim_proc: SimProcess) -> None:
     """joint_states name every movable joint; the LaserScan is well formed; /tf_static is latched."""
     out = sim_proc.client("drive.py")

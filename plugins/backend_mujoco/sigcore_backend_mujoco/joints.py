@@ -3,6 +3,8 @@ mixin; a person's joints have no actuator: only their angles are set)."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from sigcore.backend import Array, passive_joint
 from sigcore.errors import BackendRefusal
 
@@ -27,6 +29,20 @@ class MujocoJoints(MujocoBase):
             j.servo.hold(self.model, self.data, angle)
         if j.lock >= 0:  # a person's joint: its lock (active while the person is dynamic) holds the new angle
             self.model.eq_data[j.lock, 0] = angle
+        self._update_hold(e)
+        self._tick += 1
+
+    def set_joint_angles(self, entity: str, angles: Mapping[str, float]) -> None:
+        """Every ``joint: angle`` at once (a person's posture at one step): one update of the held values."""
+        e = self._entity(entity)
+        for joint, angle in angles.items():
+            j = e.joint(joint)
+            self.data.qpos[j.qpos] = angle
+            self.data.qvel[j.dof] = 0.0
+            if isinstance(j.servo, ArmServo):
+                j.servo.hold(self.model, self.data, angle)
+            if j.lock >= 0:
+                self.model.eq_data[j.lock, 0] = angle
         self._update_hold(e)
         self._tick += 1
 

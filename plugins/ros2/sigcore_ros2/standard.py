@@ -46,7 +46,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("sigcore.ros2")
 
-
+WALK_TIMEOUT = 0.5
+"""A person walked by ``/<person>/cmd_vel`` stands again after this long without a message [s of simulated time]
+(as a robot's drive with the default ``cmd_vel_timeout``)."""
 
 
 class StandardEndpoints:
@@ -84,7 +86,9 @@ class StandardEndpoints:
         self._owned: dict[str, list[str]] = {}  # robot -> its topics
         self._timed_out: set[str] = set()  # robots whose cmd_vel timeout was logged (once each)
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
+        self._walk_deadline: dict[str, int] = {}  # person -> step at which its cmd_vel times out
         self.add([h.name for h in sim.entities.values() if isinstance(h, RobotObj)])
+        self.add_people(list(sim.entities.people.names))
         sim.events.subscribe("scan", self._scan)
 
     def _timing(self) -> None:
@@ -101,6 +105,7 @@ class StandardEndpoints:
         timestep, /clock starts again at its time 0, its robots get their topics."""
         self._timing()
         self.add([h.name for h in self.sim.entities.values() if isinstance(h, RobotObj)])
+        self.add_people(list(self.sim.entities.people.names))
 
     # ------------------------------------------------------------------ entities added and removed
     def add(self, robots: list[str]) -> None:
@@ -139,6 +144,37 @@ class StandardEndpoints:
                     own.append(topic)
         self.rebuild()
 
+    @property
+    def owners(self) -> tuple[str, ...]:
+        """The robots and people that have topics here."""
+        return tuple(self._owned)
+
+    def add_people(self, people: list[str]) -> None:
+        """Create ``/<person>/cmd_vel`` (geometry_msgs/Twist) of each of ``people``: it walks the person
+        (``sim.inputs.person_velocity``), which stands again when no message came for :data:`WALK_TIMEOUT` s of
+        simulated time."""
+        for name in people:
+            topic = f"{self.sim.entities.namespace(name)}/{name}/cmd_vel"
+            sub = self.node.create_subscription(Twist, topic, lambda *_: None, self.qos.commands(topic))
+            self.receiver.add_subscription(sub, self._walk(name, topic))
+            self.cmd_vel_sub[name] = sub
+            self.topics[topic] = "geometry_msgs/msg/Twist"
+            self._owned.setdefault(name, []).append(topic)
+
+    def _walk(self, person: str, topic: str) -> Any:
+        """The handler of ``/<person>/cmd_vel``."""
+        steps = max(1, round(WALK_TIMEOUT / self.sim.dt))
+
+        def handle(msg: Twist) -> None:
+            try:
+                self.sim.inputs.person_velocity(person, msg.linear.x, msg.angular.z)
+            except ApiError as e:  # the transport's log filter lets one record per (topic, kind) through
+                log.warning("%s refused: %s", topic, clip(str(e)), extra=log_key(topic, type(e).__name__))
+                return
+            self._walk_deadline[person] = self.sim.step_count + steps
+
+        return handle
+
     def remove(self, robots: list[str]) -> None:
         """Destroy the topics of ``robots`` (deleted while running), then rebuild the state messages."""
         node = self.node
@@ -157,6 +193,7 @@ class StandardEndpoints:
             for table in (self.prefix, self.base, self.joints):
                 table.pop(name, None)
             self._cmd_vel_deadline.pop(name, None)
+            self._walk_deadline.pop(name, None)
             self._timed_out.discard(name)
         self.rebuild()
 
@@ -201,6 +238,9 @@ class StandardEndpoints:
                                         name, "drive", "drive"))
                     out.append(Endpoint(f"/{name}/cmd_vel", "geometry_msgs/msg/Twist", "topic",
                                         f"the cmd_vel {what}", name, "drive", "drive"))
+        for name in sim.entities.people.names:
+            out.append(Endpoint(f"/{name}/cmd_vel", "geometry_msgs/msg/Twist", "topic",
+                                f"the walk of human '{name}' (linear.x, angular.z)", name, "name"))
         for lidar in sim.entities.lidars:
             out.append(Endpoint(f"/{lidar.robot}/{lidar.model.name}", "sensor_msgs/msg/LaserScan", "topic",
                                 f"the scans of <lidar name='{lidar.model.name}'> of robot '{lidar.robot}'",
@@ -262,6 +302,11 @@ class StandardEndpoints:
             self.publish_entities()
         if self._cmd_vel_deadline:
             self._stop_stale_cmd_vel(n)
+        if self._walk_deadline:
+            for name in [p for p, step in self._walk_deadline.items() if n >= step]:
+                del self._walk_deadline[name]
+                if name in sim.entities:
+                    sim.inputs.person_velocity(name, 0.0, 0.0)
 
     def publish_clock(self) -> None:
         """Publish the current time now (at start, after a reset, when the simulation goes idle, and by the /clock

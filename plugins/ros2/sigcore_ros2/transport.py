@@ -342,13 +342,15 @@ class Ros2Transport(Transport):
             if self.sigros is not None:
                 self.sigros.remove(change.removed, "the agent was deleted while the request was held")
             if self.standard is not None:
-                self.standard.remove([name for name in change.removed if name in self.standard.joints])
+                self.standard.remove([name for name in change.removed if name in self.standard.owners])
         if change.added:
             if self.sigros is not None:
                 self.sigros.add([name for name in change.added if name in sim.entities and self._selected(name)])
             if self.standard is not None:
                 self.standard.add([name for name in change.added if sim.entities.get(name) is not None
                                    and sim.entities[name].kind == "robot"])
+                self.standard.add_people([name for name in change.added if sim.entities.get(name) is not None
+                                          and sim.entities[name].kind == "human"])
         elif self.standard is not None:
             self.standard.rebuild()
         self._collect_endpoints()
