@@ -125,6 +125,8 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
         self._contacts: frozenset[tuple[int, int]] = frozenset()
         self._applied = False
         self._held = {e.name for e in self._entities.values() if e.held0}
+        for e in self._entities.values():
+            self._bits.hold_person(m, e, e.held0)
         self._hold = d.qpos.copy()
         self._rebuild_held()
         mujoco.mj_forward(m, d)
@@ -261,6 +263,8 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
             self._hold[self._entities[name].qpos] = old_hold[old_entities[name].qpos]
         self._held = {n for n in self._held if n in self._entities}
         self._held |= {p.name for p in added if self._entities[p.name].held0}
+        for p in added:
+            self._bits.hold_person(self.model, self._entities[p.name], self._entities[p.name].held0)
         self._rebuild_held()
         self._bits.forget(set(old_entities) - set(self._entities))
         self._grasps = {g for g in self._grasps if g[0] in self._entities and g[2] in self._entities}

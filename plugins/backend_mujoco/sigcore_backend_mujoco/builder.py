@@ -43,6 +43,7 @@ from sigcore.world.visuals import DEFAULT_COLOR
 
 from .plan import (
     FREE_JOINT,
+    GROUND,
     GROUP_COLLISION,
     GROUP_VISUAL,
     NORMAL,
@@ -148,7 +149,7 @@ def _new_spec(world: World) -> mujoco.MjSpec:
 def _add_ground(spec: mujoco.MjSpec) -> None:
     spec.worldbody.add_geom(name="ground", type=_GEOM.mjGEOM_PLANE, size=[0.0, 0.0, 1.0],
                             rgba=[0.8, 0.8, 0.8, 1.0], group=GROUP_COLLISION,
-                            contype=NORMAL[0], conaffinity=NORMAL[1])
+                            contype=GROUND[0], conaffinity=GROUND[1])
     spec.worldbody.add_light(name="sun", pos=[0.0, 0.0, 10.0], dir=[0.3, 0.2, -1.0],
                              type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
 

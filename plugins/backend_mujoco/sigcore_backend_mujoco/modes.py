@@ -56,6 +56,7 @@ class MujocoModes(MujocoBase):
             self.data.qvel[e.dofs] = 0.0
             self._tick += 1
         self._lock_joints(e, enabled)
+        self._bits.hold_person(self.model, e, not enabled)
         self._rebuild_held()
 
     def set_collision_mode(self, entity: str, enabled: bool) -> None:
