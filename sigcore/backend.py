@@ -17,7 +17,7 @@ Conventions, for every method:
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
@@ -384,6 +384,26 @@ class Backend(ABC):
         Returns:
             (N,) distances [m]; ``inf`` where nothing is hit within ``max_range``.
         """
+
+    def ray_hits(self, origin: Array, directions: npt.NDArray[np.float64], max_range: float,
+                 among: Collection[str]) -> tuple[Array, list[str | None]]:
+        """Cast rays that see only the entities ``among`` (they pass through every other entity and the floor):
+        where each first hits one, and which (a person's path is checked so against the static entities).
+
+        Args:
+            origin: (3,) world point [m].
+            directions: (N, 3) unit vectors, world frame.
+            max_range: ignore hits further than this [m].
+            among: the entities the rays can hit.
+
+        Returns:
+            (N,) distances [m] (``inf``: no hit within ``max_range``) and the entity each ray hit (None: none).
+
+        Raises:
+            BackendError: the backend cannot tell what a ray hit (the default).
+        """
+        raise BackendError(f"the {self.name} backend cannot tell which entity a ray hits; backends that can: "
+                           "mujoco, bullet")
 
     # ------------------------------------------------------------------ cameras (optional)
     def renderer(self) -> Renderer:

@@ -104,3 +104,8 @@ def angle_between(v: Array, axis: Array) -> float:
     v, axis = np.asarray(v, dtype=float), np.asarray(axis, dtype=float)
     c = float(np.dot(v, axis) / (np.linalg.norm(v) * np.linalg.norm(axis)))
     return math.acos(max(-1.0, min(1.0, c)))
+
+
+def wrap_angle(a: float) -> float:
+    """``a`` [rad] in (-π, π]."""
+    return math.atan2(math.sin(a), math.cos(a))

@@ -9,12 +9,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from replaying import resimulate
 
 from sigcore.agent import CollisionEvent
 from sigcore.agent.exceptions import ApiError
 from sigcore.geometry import quat_yaw
 from sigcore.record import Recorder
-from sigcore.record.replay import compare, load_recording, poses_now
+from sigcore.record.replay import load_recording
 from sigcore.sim import Simulation
 from sigcore.sim.gait import SETTLE
 from sigcore.world import parse_world
@@ -186,16 +187,7 @@ def test_a_recorded_walk_replays_bit_for_bit(tmp_path: Path) -> None:
     assert [(i.step, i.kind, i.args["linear"]) for i in rec.inputs] == [
         (10, "person_velocity", 1.0), (600, "person_velocity", 0.6), (1100, "person_velocity", 0.0)]
 
-    def replay(inputs: list) -> tuple[bool, float, str]:
-        again = Simulation(rec.world(tmp_path / "world"), "mujoco")
-        for _ in range(rec.final_step):
-            for item in inputs:
-                if item.step == again.step_count:
-                    again.inputs.apply(item)
-            again.step()
-        return compare(rec.truth[-1][1], poses_now(again))
-
-    equal, worst, _ = replay(rec.inputs)
+    equal, worst, _ = resimulate(rec, tmp_path / "world", rec.inputs)
     assert equal and worst == 0.0
-    equal, worst, _ = replay([i for i in rec.inputs if i.step != 600])
+    equal, worst, _ = resimulate(rec, tmp_path / "world", [i for i in rec.inputs if i.step != 600])
     assert not equal and worst > 0.1

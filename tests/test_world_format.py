@@ -31,6 +31,8 @@ from sigcore.world import (
     PluginConfig,
     Pose,
     Robot,
+    WalkPath,
+    Waypoint,
     World,
     WorldError,
     WorldIssue,
@@ -238,7 +240,7 @@ def test_text_inside_a_leaf_element_is_located_at_the_text(tmp_path: Path) -> No
     path = _world(tmp_path, '<world>\n  <human name="h">\n     walking\n  </human>\n</world>\n')
     [issue] = _issues(path)
     assert (issue.line, issue.column, issue.element) == (3, 6, "human")
-    assert "unexpected text 'walking'" in issue.message and "write values as attributes" in issue.message
+    assert "unexpected text 'walking'" in issue.message and "<human> holds only elements" in issue.message
 
 
 def test_text_directly_inside_world_is_reported(tmp_path: Path) -> None:
@@ -407,10 +409,11 @@ def test_agent_lookup_lists_names(full: World) -> None:
 _DOCUMENTED: dict[str, type[BaseModel]] = {
     "world": World, "plugin": PluginConfig, "robot": Robot, "drive": Drive, "lidar": Lidar, "camera": Camera,
     "gripper": Gripper, "arm": Arm, "gains": Gains, "object": Object, "human": Human, "agent": BareAgent,
-    "named_pose": NamedPose,
+    "named_pose": NamedPose, "path": WalkPath, "waypoint": Waypoint,
 }
 _NOT_ATTRIBUTES = {"kind", "lidars", "cameras", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
-                   "config", "line", "column", "positions", "named_poses", "randomize"}
+                   "config", "line", "column", "positions", "named_poses", "randomize", "path",
+                   "waypoints"}
 _BOUNDS = (annotated_types.Gt, annotated_types.Ge, annotated_types.Lt, annotated_types.Le)
 
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..geometry import wrap_angle
 from ..world.body import Body
 
 MAX_SPEED = 1.8
@@ -162,7 +163,7 @@ class Gait:
             smooth = u * u * (3.0 - 2.0 * u)
             s = self._start
             foot = _Foot(s.x + (target.x - s.x) * smooth, s.y + (target.y - s.y) * smooth,
-                         s.yaw + _wrap(target.yaw - s.yaw) * smooth)
+                         s.yaw + wrap_angle(target.yaw - s.yaw) * smooth)
             self.feet[self.swing] = foot
             lift = self._lift * math.sin(math.pi * u)
             if self.progress >= 1.0:
@@ -184,7 +185,7 @@ class Gait:
             dx, dy = foot.x - self.x, foot.y - self.y
             fx, fy = c * dx + s * dy, -s * dx + c * dy - lateral  # the ankle from the hip, in the pelvis frame
             fz = b.ankle_height + (lift if side == self.swing else 0.0)
-            local[side] = (fx, fy, fz, _wrap(foot.yaw - self.yaw))
+            local[side] = (fx, fy, fz, wrap_angle(foot.yaw - self.yaw))
             horizontal = fx * fx + fy * fy
             if horizontal < reach * reach:
                 hip_z = min(hip_z, fz + math.sqrt(reach * reach - horizontal))
@@ -218,8 +219,3 @@ def _along(foot: _Foot, yaw: float) -> float:
 
 def _clip(v: float) -> float:
     return min(1.0, max(-1.0, v))
-
-
-def _wrap(a: float) -> float:
-    """``a`` in (-π, π]."""
-    return math.atan2(math.sin(a), math.cos(a))

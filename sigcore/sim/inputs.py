@@ -4,11 +4,11 @@ at which it took effect, so that a run can be re-simulated exactly (``sigcore re
 The simulation is deterministic and applies commands only between steps: a transport runs what its clients send
 when it is serviced, a viewer what a person does. Every such command goes through a verb of :class:`Inputs`
 (``sim.inputs``, the one owner of the log: :meth:`~Inputs.base_velocity`, :meth:`~Inputs.person_velocity`,
-:meth:`~Inputs.wheel_velocity`, :meth:`~Inputs.message`, :meth:`~Inputs.entity_state`, :meth:`~Inputs.entity_info`,
-:meth:`~Inputs.spawn`, :meth:`~Inputs.delete`, :meth:`~Inputs.load_world`, :meth:`~Inputs.unload_world`), or through
-the API table (:func:`sigcore.api.call`) or :meth:`Simulation.reset`, which note themselves: the core applies the
-command and notes it, whichever client applied it, so a new transport cannot forget to. A recorder subscribes to the
-``input`` channel of ``sim.events`` and keeps them.
+:meth:`~Inputs.person_path`, :meth:`~Inputs.wheel_velocity`, :meth:`~Inputs.message`, :meth:`~Inputs.entity_state`,
+:meth:`~Inputs.entity_info`, :meth:`~Inputs.spawn`, :meth:`~Inputs.delete`, :meth:`~Inputs.load_world`,
+:meth:`~Inputs.unload_world`), or through the API table (:func:`sigcore.api.call`) or :meth:`Simulation.reset`, which
+note themselves: the core applies the command and notes it, whichever client applied it, so a new transport cannot
+forget to. A recorder subscribes to the ``input`` channel of ``sim.events`` and keeps them.
 A command noted at step ``k`` (``sim.step_count``) took effect after step ``k``'s physics and before step ``k + 1``'s:
 a replay applies it there (:meth:`Inputs.apply`), before stepping on.
 
@@ -18,6 +18,8 @@ Kinds (``Input.kind``) and their arguments:
   ``agent``, ``entry`` (the suffix, e.g. ``_grasp_obj``), ``request`` (the validated request's fields);
 - ``base_velocity``: a drive's ``cmd_vel``: ``robot``, ``linear`` [m/s], ``angular`` [rad/s];
 - ``person_velocity``: a person's walk (``/<person>/cmd_vel``): ``person``, ``linear`` [m/s], ``angular`` [rad/s];
+- ``person_path``: a path for a person to walk (``/<person>/path``): ``person``, ``path`` (the
+  :class:`~sigcore.world.models.WalkPath`'s fields: ``speed``, ``loop``, ``waypoints``);
 - ``wheel_velocity``: wheels set directly (a ``cmd_vel`` timeout stops them): ``robot``, ``left``, ``right``;
 - ``message``: a text message sent to an agent from outside (the viewer): ``sender``, ``to``, ``text``;
 - ``reset``: :meth:`Simulation.reset`: ``despawn``;
@@ -45,6 +47,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
+from ..world.models import WalkPath
 from .exceptions import ReplayError
 
 if TYPE_CHECKING:
@@ -56,8 +59,8 @@ if TYPE_CHECKING:
     from .info import EntityInfo
     from .simulation import Simulation
 
-REPLAYED = ("api", "base_velocity", "person_velocity", "wheel_velocity", "message", "reset", "entity_state", "spawn",
-            "delete", "entity_info")
+REPLAYED = ("api", "base_velocity", "person_velocity", "person_path", "wheel_velocity", "message", "reset",
+            "entity_state", "spawn", "delete", "entity_info")
 """The kinds :meth:`Inputs.apply` reproduces."""
 
 _NEEDED = {"spawn": "requests", "delete": "entities", "entity_info": "category"}
@@ -158,6 +161,15 @@ class Inputs:
         self._sim.entities.people.walk(person, linear, angular)
         self.note("person_velocity", person=person, linear=linear, angular=angular)
 
+    def person_path(self, person: str, path: WalkPath) -> None:
+        """Walk ``person`` along ``path`` (a ``/<person>/path``; ``sim.entities.people``).
+
+        Raises:
+            ApiError: no such person, or the path cannot be walked (nothing noted then).
+        """
+        self._sim.entities.people.follow(person, path)
+        self.note("person_path", person=person, path=path.model_dump(mode="json", exclude_unset=True))
+
     def wheel_velocity(self, robot: str, left: float, right: float) -> None:
         """Set ``robot``'s wheel velocities directly [rad/s] (a ``cmd_vel`` timeout stops them so)."""
         self._sim.robot(robot).set_wheel_velocity(left, right)
@@ -239,6 +251,8 @@ class Inputs:
             self.base_velocity(a["robot"], a["linear"], a["angular"])
         elif item.kind == "person_velocity":
             self.person_velocity(a["person"], a["linear"], a["angular"])
+        elif item.kind == "person_path":
+            self.person_path(a["person"], WalkPath.model_validate(a["path"]))
         elif item.kind == "wheel_velocity":
             self.wheel_velocity(a["robot"], a["left"], a["right"])
         elif item.kind == "message":

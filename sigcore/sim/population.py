@@ -97,8 +97,8 @@ class Entities(Mapping[str, SimObj]):
         """Who owns which part (``SimObj.set_owner``)."""
         self.controllers = Dispatcher(dt)
         """The agents' controllers and their callbacks (``sigcore.sim.dispatch``)."""
-        self.people = People(sim, world.entities)
-        """What moves each person (``sigcore.sim.people``: walking by velocity)."""
+        self.people = People(sim, world, lambda: self.world)
+        """What moves each person (``sigcore.sim.people``: walking by velocity, walking a path)."""
         self._spawn_dir: Path | None = None
 
     def _handle(self, model: AgentModel) -> SimObj:
@@ -316,7 +316,8 @@ class Entities(Mapping[str, SimObj]):
 
         Raises:
             SpawnRefusal: a name is taken or names a TF frame in use (NAME_NOT_UNIQUE), a controller cannot be
-                created (RESOURCE_PARSE_ERROR), the backend failed (OPERATION_FAILED); nothing changed then.
+                created or a person cannot walk its <path> (RESOURCE_PARSE_ERROR), the backend failed
+                (OPERATION_FAILED); nothing changed then.
         """
         namespaces = namespaces or {}
         taken = self._taken()
@@ -335,6 +336,9 @@ class Entities(Mapping[str, SimObj]):
             except USER_ERRORS as e:  # ControllerError, or its constructor raised
                 raise SpawnRefusal("RESOURCE_PARSE_ERROR", f"controller '{model.controller}' of '{model.name}' "
                                                            f"cannot be created: {e}") from None
+        why = self.people.refusal(models)
+        if why is not None:
+            raise SpawnRefusal("RESOURCE_PARSE_ERROR", why)
         world = self.world.with_agents(self.world.agents + tuple(models))
         try:
             self._sim.backend.add_entities(world, names)

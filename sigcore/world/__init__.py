@@ -16,6 +16,8 @@ from .models import (
     PluginConfig,
     Pose,
     Robot,
+    WalkPath,
+    Waypoint,
     World,
 )
 from .parser import parse_world
@@ -23,6 +25,6 @@ from .urdf import UrdfDocument, UrdfFiles, UrdfJoint, UrdfModel, read_urdf
 
 __all__ = [
     "Arm", "BareAgent", "Camera", "Drive", "Entity", "Gains", "Gripper", "Human", "Lidar", "NamedPose", "Object",
-    "PluginConfig", "Pose", "Robot", "UrdfDocument", "UrdfError", "UrdfFiles", "UrdfJoint", "UrdfModel", "World",
-    "WorldError", "WorldIssue", "parse_world", "read_urdf",
+    "PluginConfig", "Pose", "Robot", "UrdfDocument", "UrdfError", "UrdfFiles", "UrdfJoint", "UrdfModel", "WalkPath",
+    "Waypoint", "World", "WorldError", "WorldIssue", "parse_world", "read_urdf",
 ]

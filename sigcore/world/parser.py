@@ -11,7 +11,6 @@ from lxml import etree
 from pydantic import BaseModel, ValidationError
 
 from .exceptions import UrdfError, WorldError, WorldIssue
-from .locate import SourceMap
 from .meshes import mesh_problem
 from .messages import error_field, message, unknown
 from .models import (
@@ -27,11 +26,14 @@ from .models import (
     Object,
     PluginConfig,
     Robot,
+    WalkPath,
+    Waypoint,
     World,
     start_pose_name,
 )
 from .randomization import Choice, Option, Randomize, RandomPose, with_option
-from .urdf import UrdfFiles, UrdfModel, resolve_mesh
+from .reader import INTERNAL_FIELDS, Reader
+from .urdf import UrdfModel, resolve_mesh
 
 _AGENTS: dict[str, type[BaseModel]] = {"robot": Robot, "object": Object, "human": Human, "agent": BareAgent}
 _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
@@ -43,76 +45,7 @@ _ROBOT_CHILDREN: dict[str, tuple[type[BaseModel], str, bool]] = {
     "arm": (Arm, "arms", True),
     "gains": (Gains, "gains", False),
 }
-_INTERNAL_FIELDS = {"kind", "lidars", "cameras", "grippers", "arms", "drive", "gains", "plugins", "agents", "source",
-                    "config", "line", "column", "positions", "named_poses", "randomize", "poses", "choices",
-                    "options", "attributes"}
 _LIBXML_POSITION = re.compile(r", line \d+, column \d+$")
-
-
-class _Reader:
-    def __init__(self, path: Path, text: str, root: etree._Element) -> None:
-        self.path = path
-        self.map = SourceMap(text, root)
-        self.issues: list[WorldIssue] = []
-        self.locations: dict[tuple[str, str | None], tuple[int, int]] = {}
-        self.urdfs = UrdfFiles()
-
-    def issue(self, element: etree._Element, attribute: str | None, message: str) -> None:
-        line, col = self.map.attribute(element, attribute) if attribute else self.map.element(element)
-        self.issues.append(WorldIssue(self.path, line, col, str(element.tag), attribute, message))
-
-    def line(self, element: etree._Element) -> int:
-        return self.map.element(element)[0]
-
-    def attributes(self, element: etree._Element, model: type[BaseModel]) -> dict[str, Any]:
-        fields = sorted(set(model.model_fields) - _INTERNAL_FIELDS)
-        out: dict[str, Any] = {}
-        for key, value in element.attrib.items():
-            key = str(key)
-            if key not in fields:
-                self.issue(element, key, unknown("attribute", key, fields))
-            else:
-                out[key] = str(value)
-        return out
-
-    def build(self, element: etree._Element, model: type[BaseModel], extra: dict[str, Any]) -> Any:
-        """``element``'s attributes and ``extra`` (fields from children) as a ``model``; None on error."""
-        data = self.attributes(element, model)
-        try:
-            return model.model_validate({**data, **extra})
-        except ValidationError as e:
-            for err in e.errors():
-                field = error_field(err)
-                attribute = field if field in data else None
-                self.issue(element, attribute, message(model, err, data.get(field) if field else None))
-            return None
-
-    def children_of(self, element: etree._Element, allowed: dict[str, Any]) -> list[etree._Element]:
-        """The child elements of ``element`` whose tag is in ``allowed``; reports the others and any text."""
-        out = []
-        for child in element:
-            if isinstance(child, etree._Entity):  # an entity reference left unexpanded: text, which has no place
-                self.issues.append(WorldIssue(self.path, int(child.sourceline or self.line(element)), 1,
-                                              str(element.tag), None, f"unexpected entity reference {child.text}; "
-                                              f"<{element.tag}> holds no text and entities are not expanded"))
-                continue
-            if not isinstance(child.tag, str):
-                continue  # comments, processing instructions
-            if child.tag in allowed:
-                out.append(child)
-            elif allowed:
-                what = f"element inside <{element.tag}>"
-                self.issue(child, None, unknown(what, str(child.tag), list(allowed)))
-            else:
-                self.issue(child, None, f"unexpected element; <{element.tag}> has no child elements, only "
-                                        "attributes")
-        texts = [t.strip() for t in [element.text, *(c.tail for c in element)] if t and t.strip()]
-        if texts:
-            line, col = self.map.text(element)
-            holds = "only elements" if allowed else "no text; write values as attributes"
-            says = f"unexpected text {texts[0][:30]!r}; <{element.tag}> holds {holds}"
-            self.issues.append(WorldIssue(self.path, line, col, str(element.tag), None, says))
-        return out
 
 
 def parse_world(path: Path | str, text: str | None = None) -> World:
@@ -137,7 +70,7 @@ def parse_world(path: Path | str, text: str | None = None) -> World:
         line, col = e.position
         msg = _LIBXML_POSITION.sub("", str(e.msg))
         raise WorldError([WorldIssue(path, line, col, None, None, f"not well-formed XML: {msg}")]) from None
-    reader = _Reader(path, text, root)
+    reader = Reader(path, text, root)
     doctype = root.getroottree().docinfo
     if doctype.doctype or doctype.internalDTD is not None:
         line = text.count("\n", 0, max(text.find("<!DOCTYPE"), 0)) + 1
@@ -207,7 +140,7 @@ def _read(path: Path) -> str:
                                      "valid: a file saved as UTF-8")]) from None
 
 
-def _plugin(reader: _Reader, element: etree._Element) -> PluginConfig | None:
+def _plugin(reader: Reader, element: etree._Element) -> PluginConfig | None:
     reader.children_of(element, {})
     attrs = {str(k): str(v) for k, v in element.attrib.items()}
     name = attrs.pop("name", None)
@@ -225,7 +158,7 @@ def _plugin(reader: _Reader, element: etree._Element) -> PluginConfig | None:
         return None
 
 
-def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
+def _agent(reader: Reader, element: etree._Element, base: Path) -> Any:
     tag = str(element.tag)
     model = _AGENTS[tag]
     extra: dict[str, Any] = {}
@@ -249,6 +182,15 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
                 extra[field] = values
             elif values:
                 extra[field] = values[0]
+    elif tag == "human":
+        paths = reader.children_of(element, {"path": 1})
+        for extra_path in paths[1:]:
+            reader.issue(extra_path, None, f"<path> may appear only once in a <human> (first on line "
+                                           f"{reader.line(paths[0])})")
+        if paths:
+            path = _path(reader, paths[0])
+            if path is not None:
+                extra["path"] = path
     else:
         reader.children_of(element, {})
     agent = reader.build(element, model, extra)
@@ -267,17 +209,42 @@ def _agent(reader: _Reader, element: etree._Element, base: Path) -> Any:
         for field, tag in (("lidars", "lidar"), ("cameras", "camera"), ("arms", "arm")):
             for child, value in children[field]:
                 reader.locations[(agent.name, f"{tag}:{value.name}")] = reader.map.attribute(child, "name")
+        if isinstance(agent, Human) and agent.path is not None:
+            path_element = element.find("path")
+            reader.locations[(agent.name, "path")] = reader.map.element(path_element)
+            for i, point in enumerate(path_element.findall("waypoint")):
+                reader.locations[(agent.name, f"waypoint:{i}")] = reader.map.element(point)
+                for key in point.attrib:
+                    reader.locations[(agent.name, f"waypoint:{i}:{key}")] = reader.map.attribute(point, str(key))
     return agent
 
 
-def _located(reader: _Reader, element: etree._Element) -> dict[str, Any]:
+def _path(reader: Reader, element: etree._Element) -> WalkPath | None:
+    """A ``<path>`` and its ``<waypoint>`` children; None (reported) on error."""
+    points = reader.children_of(element, {"waypoint": 1})
+    waypoints = []
+    for point in points:
+        reader.children_of(point, {})
+        waypoint = reader.build(point, Waypoint, {})
+        if waypoint is not None:
+            waypoints.append(waypoint)
+    if not points:
+        reader.issue(element, None, "a <path> with no points; valid: one or more <waypoint x=\"..\" y=\"..\"/> "
+                                    "inside it, walked in order")
+        return None
+    # a waypoint with errors was reported: the path's own attributes are still checked, on a stand-in
+    path: WalkPath | None = reader.build(element, WalkPath, {"waypoints": tuple(waypoints) or (Waypoint(x=0, y=0),)})
+    return path if len(waypoints) == len(points) else None
+
+
+def _located(reader: Reader, element: etree._Element) -> dict[str, Any]:
     """Where ``element`` and each of its attributes are: the ``line``, ``column`` and ``positions`` fields."""
     line, column = reader.map.element(element)
     return {"line": line, "column": column,
             "positions": {str(k): reader.map.attribute(element, str(k)) for k in element.attrib}}
 
 
-def _randomize(reader: _Reader, elements: list[etree._Element], agents: list[Any], base: Path) -> Randomize | None:
+def _randomize(reader: Reader, elements: list[etree._Element], agents: list[Any], base: Path) -> Randomize | None:
     """The ``<randomize>`` element (at most one) as a model; its ``<choose>`` options validated against their
     object. What needs the whole world (names, surfaces, bounds) is :func:`sigcore.world.randomize.check`'s."""
     if not elements:
@@ -315,11 +282,11 @@ def _randomize(reader: _Reader, elements: list[etree._Element], agents: list[Any
                                              **_located(reader, element)})
 
 
-def _option(reader: _Reader, element: etree._Element, target: etree._Element | None, base: Path) -> Option | None:
+def _option(reader: Reader, element: etree._Element, target: etree._Element | None, base: Path) -> Option | None:
     """One ``<option>``: its object attributes checked as the object ``target`` would take them (errors at the
     option's line), its ``urdf``/``mesh`` files as an object's."""
     reader.children_of(element, {})
-    valid = sorted((set(Object.model_fields) - _INTERNAL_FIELDS - {"name"}) | {"weight"})
+    valid = sorted((set(Object.model_fields) - INTERNAL_FIELDS - {"name"}) | {"weight"})
     attributes: dict[str, str] = {}
     own: dict[str, Any] = {}
     for key, value in element.attrib.items():
@@ -354,7 +321,7 @@ def _option(reader: _Reader, element: etree._Element, target: etree._Element | N
         return None
 
 
-def _check_files(reader: _Reader, element: etree._Element, base: Path,
+def _check_files(reader: Reader, element: etree._Element, base: Path,
                  children: dict[str, list[Any]]) -> None:
     """Check that ``urdf``/``mesh`` files exist, that a URDF reads, and the names a robot takes from it."""
     for attr in ("urdf",) if element.tag == "robot" else ("urdf", "mesh"):
@@ -428,7 +395,7 @@ def _path_too_long(raw: str) -> str | None:
     return None
 
 
-def _check_robot(reader: _Reader, urdf: UrdfModel, file: str, children: dict[str, list[Any]]) -> None:
+def _check_robot(reader: Reader, urdf: UrdfModel, file: str, children: dict[str, list[Any]]) -> None:
     """Check the names that a robot's child elements take from its URDF."""
     movable = sorted(j.name for j in urdf.movable_joints)
     for child, drive in children["drive"]:
@@ -455,7 +422,7 @@ def _check_robot(reader: _Reader, urdf: UrdfModel, file: str, children: dict[str
                                             "'<name>_optical_frame' are not links")
 
 
-def _automatic_poses(reader: _Reader, poses: list[Any], agents: list[Any]) -> None:
+def _automatic_poses(reader: Reader, poses: list[Any], agents: list[Any]) -> None:
     """Report every named pose that takes the name of a robot's automatic start pose."""
     starts = {start_pose_name(a.name): a.name for a in agents if isinstance(a, Robot)}
     for element, pose in poses:
@@ -464,7 +431,7 @@ def _automatic_poses(reader: _Reader, poses: list[Any], agents: list[Any]) -> No
                                           f"'{starts[pose.name]}'; valid: another name")
 
 
-def _unique(reader: _Reader, items: list[Any], attr: str, rule: str) -> None:
+def _unique(reader: Reader, items: list[Any], attr: str, rule: str) -> None:
     """Report every item whose ``attr`` repeats an earlier one's, pointing at the first."""
     first: dict[str, etree._Element] = {}
     for element, value in items:

@@ -176,3 +176,23 @@ def test_rays_see_moved_state(make_world, build) -> None:
     b.set_pose("o", np.array([1.0, 0.0, 0.25]))
     dist = b.ray_cast(np.array([0.0, 0.0, 0.25]), np.array([[1.0, 0.0, 0.0]]), 10.0)
     assert dist[0] == pytest.approx(0.9, abs=1e-6)
+
+
+def test_ray_hits_see_only_the_entities_among_and_name_them(make_world, build) -> None:
+    """``ray_hits`` passes through what is not among the entities asked about (the robot, a person, a box) and
+    names the one it hits: east through the robot, a box and a person's legs to the east wall (within 1e-6 m); with
+    the box asked about too, the box; among nothing, no hit."""
+    hip = 0.6 * 1.7 / 7.5
+    b = build(make_world(ROOM + robot() + f'<human name="h" pose="1.5 {-hip} 0"/>'
+                         '<object name="o" shape="box" size="0.2 0.2 0.2" pose="0.8 0 0.1"/>'))
+    walls = ["wall_e", "wall_w", "wall_n", "wall_s"]
+    origin = np.array([0.0, 0.0, 0.1])
+    dirs = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    dist, names = b.ray_hits(origin, dirs, 10.0, walls)
+    assert names == ["wall_e", "wall_n", None]
+    np.testing.assert_allclose(dist[:2], [X_MAX, Y_MAX], atol=1e-6)
+    assert dist[2] == np.inf
+    dist, names = b.ray_hits(origin, dirs[:1], 10.0, [*walls, "o"])
+    assert names == ["o"] and dist[0] == pytest.approx(0.7, abs=1e-6)
+    dist, names = b.ray_hits(origin, dirs[:1], 10.0, [])
+    assert names == [None] and dist[0] == np.inf

@@ -179,6 +179,17 @@ def test_cmd_vel_walks_a_person_whose_frames_follow(sim_proc: SimProcess) -> Non
     assert {"l_knee_man", "r_ankle_man", "p_head_man", "man"} <= set(out["frames"])  # movable joints' children
 
 
+def test_a_path_on_man_path_walks_the_person_and_bad_paths_are_refused(sim_proc: SimProcess) -> None:
+    """A nav_msgs/Path from another process walks the person through its poses (0.5 m, a quarter turn, 0.5 m at
+    1.0 m/s: about 2 s), ending within 1 cm of the last; a path through the wall, in another frame, with no poses or
+    with a NaN is refused and the person stays there."""
+    out = sim_proc.client("path.py", timeout=60)
+    assert out["start"] == pytest.approx([-2.0, -1.5], abs=1e-6)
+    assert out["arrived"] == pytest.approx([-1.5, -1.0], abs=0.01)
+    assert 1.5 < out["took"] < 10.0  # real time paced: 2.05 s simulated, with wide margins for a loaded machine
+    assert out["after"] == pytest.approx(out["arrived"], abs=1e-6)
+
+
 def test_joint_states_scan_and_static_frames(sim_proc: SimProcess) -> None:
     """joint_states name every movable joint; the LaserScan is well formed; /tf_static is latched."""
     out = sim_proc.client("drive.py")

@@ -36,7 +36,7 @@ number of simulations live in one process. Techniques (each checked by ``tests/b
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from typing import ClassVar
 
 import numpy as np
@@ -398,3 +398,11 @@ class BulletBackend(BulletState, BulletModes, BulletJoints):
             return rays.cast(c, origin, directions, max_range, None)
         e = self._entity(exclude)
         return rays.cast(c, origin, directions, max_range, e.body, e.links)
+
+    def ray_hits(self, origin: Array, directions: npt.NDArray[np.float64], max_range: float,
+                 among: Collection[str]) -> tuple[Array, list[str | None]]:
+        """``rayTestBatch``, passing through every body but those of ``among`` (see :func:`.rays.first_hits`)."""
+        c = self._client()
+        bodies = {self._entity(name).body: name for name in among}
+        distances, hit = rays.first_hits(c, origin, directions, max_range, bodies)
+        return distances, [bodies.get(b) for b in hit.tolist()]

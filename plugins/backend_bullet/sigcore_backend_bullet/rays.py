@@ -13,7 +13,7 @@ the robot's arm).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from operator import itemgetter
 
 import numpy as np
@@ -91,6 +91,43 @@ def cast(client: int, origin: Array, directions: Array, max_range: float, exclud
         todo = again[travelled[again] < max_range]
     out[out > max_range] = np.inf
     return out
+
+
+def first_hits(client: int, origin: Array, directions: Array, max_range: float, among: Collection[int],
+               passes: int = 4 * MAX_PASSES) -> tuple[Array, npt.NDArray[np.int64]]:
+    """Distances [m] along (N, 3) unit ``directions`` from ``origin`` to the first surface of a body in ``among``,
+    and that body (-1: none within ``max_range``). A ray that hits another body is cast again from where it leaves
+    that link's bounding box (as :func:`cast` passes the excluded entity), up to ``passes`` times."""
+    dirs = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+    n = dirs.shape[0]
+    o = np.asarray(origin, dtype=np.float64)
+    out = np.full(n, np.inf)
+    hit_body = np.full(n, -1, dtype=np.int64)
+    travelled = np.zeros(n)
+    wanted = np.fromiter(among, dtype=np.int64)
+    todo = np.arange(n)
+    for _ in range(passes):
+        if todo.size == 0:
+            break
+        part = travelled[todo]
+        starts = (o + dirs[todo] * part[:, None]).tolist()
+        body, link, fraction = _batch(client, starts, (o + dirs[todo] * max_range).tolist())
+        hit = body >= 0
+        final = hit & np.isin(body, wanted)
+        out[todo[final]] = (part + fraction * (max_range - part))[final]
+        hit_body[todo[final]] = body[final]
+        through = hit & ~final
+        again = todo[through]
+        exits = np.empty(again.size)
+        for i, (b, k) in enumerate(zip(body[through].tolist(), link[through].tolist(), strict=True)):
+            lo, hi = pb.getAABB(b, k, physicsClientId=client)
+            start = o + dirs[again[i]] * travelled[again[i]]
+            exits[i] = _slab_exit(start[None, :], dirs[again[i]][None, :], np.array(lo), np.array(hi))[0]
+        travelled[again] += np.maximum(exits, 0.0) + STEP_THROUGH
+        todo = again[travelled[again] < max_range]
+    far = out > max_range
+    out[far], hit_body[far] = np.inf, -1
+    return out, hit_body
 
 
 def _within(inner: tuple[Sequence[float], Sequence[float]], outer: tuple[Sequence[float], Sequence[float]]) -> bool:

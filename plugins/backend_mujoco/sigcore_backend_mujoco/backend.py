@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import copy
 import logging
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from typing import ClassVar
 
 import mujoco
@@ -344,3 +344,17 @@ class MujocoBackend(MujocoState, MujocoModes, MujocoJoints):
         geoms = self._entity(exclude).geoms if exclude is not None else None
         self._sync()
         return self._rays.cast(self.model, self.data, origin, directions, max_range, geoms)
+
+    def ray_hits(self, origin: Array, directions: npt.NDArray[np.float64], max_range: float,
+                 among: Collection[str]) -> tuple[Array, list[str | None]]:
+        """``mj_multiRay`` with every geom but those of ``among`` set aside (see :mod:`.rays`), and the entity of
+        each geom hit."""
+        if not self._built:
+            raise BackendError("the MuJoCo backend has no world yet; call build(world) first")
+        seen = [self._entity(name).geoms for name in among]
+        keep = np.concatenate(seen) if seen else np.zeros(0, dtype=np.int64)
+        hidden = np.setdiff1d(np.arange(self.model.ngeom, dtype=np.int64), keep)
+        self._sync()
+        distances = self._rays.cast(self.model, self.data, origin, directions, max_range, hidden)
+        table, parts = self._layout.part_table, self._layout.geom_part
+        return distances, [table[parts[g]][0] if g >= 0 else None for g in self._rays.hit_geoms.tolist()]

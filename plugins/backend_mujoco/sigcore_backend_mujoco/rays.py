@@ -26,6 +26,7 @@ class RayCaster:
         self._mask[GROUP_COLLISION] = 1
         self._geomid = np.zeros(0, dtype=np.int32)
         self._dist = np.zeros(0)
+        self.hit_geoms = np.zeros(0, dtype=np.int32)
 
     def cast(self, model: mujoco.MjModel, data: mujoco.MjData, origin: Array, directions: Array,
              max_range: float, exclude: Ints | None) -> Array:
@@ -60,4 +61,5 @@ class RayCaster:
             mujoco.mj_multiRay(model, data, pnt, vec, self._mask, 1, -1, geomid, dist, None, n, max_range)
         out = dist.copy()
         out[(geomid < 0) | (out > max_range)] = np.inf
+        self.hit_geoms = np.where(np.isfinite(out), geomid, -1)  # the geom each ray hit first (-1: none)
         return out

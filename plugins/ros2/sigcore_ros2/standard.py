@@ -16,7 +16,8 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from geometry_msgs.msg import TransformStamped, Twist
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import Odometry, Path
+from pydantic import ValidationError
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState, LaserScan
@@ -30,6 +31,7 @@ from sigcore.sim.lidar import Scan
 from sigcore.sim.odometry_covariance import odometry_covariance
 from sigcore.text import clip
 from sigcore.transport import Endpoint
+from sigcore.world.models import WalkPath, Waypoint
 
 from .cdr import CdrTemplate
 from .convert import offered
@@ -49,6 +51,8 @@ log = logging.getLogger("sigcore.ros2")
 WALK_TIMEOUT = 0.5
 """A person walked by ``/<person>/cmd_vel`` stands again after this long without a message [s of simulated time]
 (as a robot's drive with the default ``cmd_vel_timeout``)."""
+PATH_SPEED = 1.0
+"""The speed a person walks a ``/<person>/path`` at when its world file gives it no ``<path speed>`` [m/s]."""
 
 
 class StandardEndpoints:
@@ -83,6 +87,7 @@ class StandardEndpoints:
         self.joints: dict[str, list[str]] = {}
         self.scan_pub: dict[tuple[str, str], Any] = {}
         self.cmd_vel_sub: dict[str, Any] = {}
+        self.path_sub: dict[str, Any] = {}
         self._owned: dict[str, list[str]] = {}  # robot -> its topics
         self._timed_out: set[str] = set()  # robots whose cmd_vel timeout was logged (once each)
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
@@ -150,16 +155,58 @@ class StandardEndpoints:
         return tuple(self._owned)
 
     def add_people(self, people: list[str]) -> None:
-        """Create ``/<person>/cmd_vel`` (geometry_msgs/Twist) of each of ``people``: it walks the person
-        (``sim.inputs.person_velocity``), which stands again when no message came for :data:`WALK_TIMEOUT` s of
-        simulated time."""
+        """Create ``/<person>/cmd_vel`` (geometry_msgs/Twist) and ``/<person>/path`` (nav_msgs/Path) of each of
+        ``people``. A Twist walks the person (``sim.inputs.person_velocity``), which stands again when no message
+        came for :data:`WALK_TIMEOUT` s of simulated time; a Path has it walk through the poses' positions
+        (``sim.inputs.person_path``) at its ``<path>``'s speed, or :data:`PATH_SPEED`."""
         for name in people:
-            topic = f"{self.sim.entities.namespace(name)}/{name}/cmd_vel"
+            ns = self.sim.entities.namespace(name)
+            topic = f"{ns}/{name}/cmd_vel"
             sub = self.node.create_subscription(Twist, topic, lambda *_: None, self.qos.commands(topic))
             self.receiver.add_subscription(sub, self._walk(name, topic))
             self.cmd_vel_sub[name] = sub
             self.topics[topic] = "geometry_msgs/msg/Twist"
-            self._owned.setdefault(name, []).append(topic)
+            path_topic = f"{ns}/{name}/path"
+            sub = self.node.create_subscription(Path, path_topic, lambda *_: None, self.qos.commands(path_topic))
+            self.receiver.add_subscription(sub, self._path(name, path_topic))
+            self.path_sub[name] = sub
+            self.topics[path_topic] = "nav_msgs/msg/Path"
+            self._owned.setdefault(name, []).extend([topic, path_topic])
+
+    def _path(self, person: str, topic: str) -> Any:
+        """The handler of ``/<person>/path``."""
+
+        def handle(msg: Path) -> None:
+            try:
+                path = self._walk_path(person, msg)
+                self.sim.inputs.person_path(person, path)
+            except ApiError as e:
+                log.warning("%s refused: %s", topic, clip(str(e)), extra=log_key(topic, type(e).__name__))
+                return
+            self._walk_deadline.pop(person, None)  # a cmd_vel's timeout must not stop the path
+
+        return handle
+
+    def _walk_path(self, person: str, msg: Path) -> WalkPath:
+        """The :class:`WalkPath` of a nav_msgs/Path for ``person``.
+
+        Raises:
+            ApiError: a frame other than the world's, no poses, a position that is not finite or out of range.
+        """
+        frame = msg.header.frame_id
+        if frame not in ("", WORLD):
+            raise ApiError(f"a path in frame '{clip(frame, 40)}'; valid: '{WORLD}' (or empty): the positions are "
+                           "the world's")
+        if not msg.poses:
+            raise ApiError("a path with no poses; valid: one or more, walked in order (their positions' x and y)")
+        own = self.sim.entities.people.model(person).path
+        try:
+            points = tuple(Waypoint(x=p.pose.position.x, y=p.pose.position.y) for p in msg.poses)
+            return WalkPath(speed=own.speed if own is not None else PATH_SPEED, waypoints=points)
+        except ValidationError as e:
+            first = e.errors()[0]
+            where = ".".join(str(v) for v in first["loc"])
+            raise ApiError(f"a path's poses: {where}: {first['msg']} (got {first.get('input')!r})") from None
 
     def _walk(self, person: str, topic: str) -> Any:
         """The handler of ``/<person>/cmd_vel``."""
@@ -181,9 +228,10 @@ class StandardEndpoints:
         for name in robots:
             for topic in self._owned.pop(name, []):
                 self.topics.pop(topic, None)
-            sub = self.cmd_vel_sub.pop(name, None)
-            if sub is not None and self.receiver.retire([sub]):
-                node.destroy_subscription(sub)
+            for subs in (self.cmd_vel_sub, self.path_sub):
+                sub = subs.pop(name, None)
+                if sub is not None and self.receiver.retire([sub]):
+                    node.destroy_subscription(sub)
             for pubs in (self.joint_pub, self.odom_pub):
                 pub = pubs.pop(name, None)
                 if pub is not None:
@@ -241,6 +289,8 @@ class StandardEndpoints:
         for name in sim.entities.people.names:
             out.append(Endpoint(f"/{name}/cmd_vel", "geometry_msgs/msg/Twist", "topic",
                                 f"the walk of human '{name}' (linear.x, angular.z)", name, "name"))
+            out.append(Endpoint(f"/{name}/path", "nav_msgs/msg/Path", "topic",
+                                f"a path for human '{name}' to walk (the poses' x, y)", name, "name"))
         for lidar in sim.entities.lidars:
             out.append(Endpoint(f"/{lidar.robot}/{lidar.model.name}", "sensor_msgs/msg/LaserScan", "topic",
                                 f"the scans of <lidar name='{lidar.model.name}'> of robot '{lidar.robot}'",

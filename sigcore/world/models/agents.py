@@ -12,6 +12,7 @@ from pydantic import Field, field_validator, model_validator
 from ..exceptions import FieldError
 from ..limits import MAX_SIZE
 from .base import Description, EntityTags, Floats, Name, Pose, PoseField, Tags, Vec4, _Model
+from .paths import WalkPath
 from .sensors import Camera, Lidar
 
 _CONTROLLER = "'package.module:Class' or a registered controller name"
@@ -158,6 +159,7 @@ class Human(_Model):
     controller: str | None = Field(default=None, description=_CONTROLLER)
     tags: EntityTags = Field(default=(), description="space-separated labels, e.g. 'trash can'")
     description: Description = Field(default="", description="human-readable description (get_entity_info)")
+    path: WalkPath | None = Field(default=None, description="the <path> it walks from the start (sigcore.sim.paths)")
 
 
 class BareAgent(_Model):
