@@ -109,3 +109,11 @@ def angle_between(v: Array, axis: Array) -> float:
 def wrap_angle(a: float) -> float:
     """``a`` [rad] in (-π, π]."""
     return math.atan2(math.sin(a), math.cos(a))
+
+
+def angle_about(axis: Sequence[float] | Array, wxyz: Sequence[float] | Array) -> float:
+    """The angle [rad] of rotation ``wxyz`` (w, x, y, z; normalised here, not zero) about the unit ``axis``: its
+    twist about it (what a 1-DoF revolute joint with that axis takes of the rotation)."""
+    q = np.asarray(wxyz, dtype=float)
+    q = q / float(np.linalg.norm(q))
+    return 2.0 * math.atan2(float(np.dot(q[1:], np.asarray(axis, dtype=float))), float(q[0]))

@@ -79,7 +79,7 @@ def test_api_lists_every_agent() -> None:
     r = sigcore("api", str(WORLD))
     assert r.returncode == 0
     assert "bot (robot): 53 endpoints" in r.stdout and "cube (object): 0 endpoints" in r.stdout
-    assert "7 agents, 142 agent endpoints, 72 others, 214 in all" in r.stdout
+    assert "7 agents, 142 agent endpoints, 73 others, 215 in all" in r.stdout
     assert "/sigcore/sigros/get_obj_position" in r.stdout
     assert "/tf_static" in r.stdout and "/bot/cmd_vel" in r.stdout and "/man/cmd_vel" in r.stdout
 

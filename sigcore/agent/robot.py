@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 
 import numpy as np
 
 from ..backend import MAIN, Array
-from ..geometry import quat_conj, quat_mul
+from ..geometry import angle_about, quat_conj, quat_mul
 from ..text import quote
 from .exceptions import ApiError, GraspError, GraspRefusal
 from .handle import SimObj, _num, _vec
@@ -69,9 +68,7 @@ class RobotObj(SimObj):
         urdf_joint = self.sim.entities.urdf(self.name).joint(j)
         if urdf_joint.type == "prismatic":
             raise ApiError(f"joint '{j}' is prismatic; set_joint_quaternion needs a revolute joint")
-        axis = np.asarray(urdf_joint.axis, dtype=float)
-        q = q / n
-        angle = 2.0 * math.atan2(float(np.dot(q[1:], axis)), q[0])
+        angle = angle_about(urdf_joint.axis, q)
         if offset:
             angle += self.joint_angle(j)
         self.set_joint_angle(j, angle)

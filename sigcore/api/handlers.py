@@ -45,6 +45,10 @@ def set_joint_velocity(sim: Simulation, agent: str, m: Any) -> None:
 
 
 def set_joint_angle(sim: Simulation, agent: str, m: Any) -> None:
+    person = m.name or agent
+    if person in sim.entities.people.names:  # a person's joints are posed kinematically (sigcore.sim.people)
+        sim.entities.people.set_joints(person, {m.joint_name: m.angle})
+        return
     _robot(sim, agent, m.name).set_joint_angle(m.joint_name, m.angle)
 
 
@@ -53,6 +57,12 @@ def set_joint_target(sim: Simulation, agent: str, m: Any) -> None:
 
 
 def set_joint_quaternion(sim: Simulation, agent: str, m: Any) -> None:
+    person = m.name or agent
+    if person in sim.entities.people.names:
+        people = sim.entities.people
+        people.set_joints(person, {m.joint_name: people.joint_quaternion(person, m.joint_name,
+                                                                         (m.qw, m.qx, m.qy, m.qz), m.offset)})
+        return
     _robot(sim, agent, m.name).set_joint_quaternion(m.joint_name, (m.qw, m.qx, m.qy, m.qz), m.offset)
 
 

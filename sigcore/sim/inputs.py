@@ -4,11 +4,12 @@ at which it took effect, so that a run can be re-simulated exactly (``sigcore re
 The simulation is deterministic and applies commands only between steps: a transport runs what its clients send
 when it is serviced, a viewer what a person does. Every such command goes through a verb of :class:`Inputs`
 (``sim.inputs``, the one owner of the log: :meth:`~Inputs.base_velocity`, :meth:`~Inputs.person_velocity`,
-:meth:`~Inputs.person_path`, :meth:`~Inputs.wheel_velocity`, :meth:`~Inputs.message`, :meth:`~Inputs.entity_state`,
-:meth:`~Inputs.entity_info`, :meth:`~Inputs.spawn`, :meth:`~Inputs.delete`, :meth:`~Inputs.load_world`,
-:meth:`~Inputs.unload_world`), or through the API table (:func:`sigcore.api.call`) or :meth:`Simulation.reset`, which
-note themselves: the core applies the command and notes it, whichever client applied it, so a new transport cannot
-forget to. A recorder subscribes to the ``input`` channel of ``sim.events`` and keeps them.
+:meth:`~Inputs.person_path`, :meth:`~Inputs.person_joints`, :meth:`~Inputs.wheel_velocity`, :meth:`~Inputs.message`,
+:meth:`~Inputs.entity_state`, :meth:`~Inputs.entity_info`, :meth:`~Inputs.spawn`, :meth:`~Inputs.delete`,
+:meth:`~Inputs.load_world`, :meth:`~Inputs.unload_world`), or through the API table (:func:`sigcore.api.call`) or
+:meth:`Simulation.reset`, which note themselves: the core applies the command and notes it, whichever client applied
+it, so a new transport cannot forget to. A recorder subscribes to the ``input`` channel of ``sim.events`` and keeps
+them.
 A command noted at step ``k`` (``sim.step_count``) took effect after step ``k``'s physics and before step ``k + 1``'s:
 a replay applies it there (:meth:`Inputs.apply`), before stepping on.
 
@@ -20,6 +21,8 @@ Kinds (``Input.kind``) and their arguments:
 - ``person_velocity``: a person's walk (``/<person>/cmd_vel``): ``person``, ``linear`` [m/s], ``angular`` [rad/s];
 - ``person_path``: a path for a person to walk (``/<person>/path``): ``person``, ``path`` (the
   :class:`~sigcore.world.models.WalkPath`'s fields: ``speed``, ``loop``, ``waypoints``);
+- ``person_joints``: a person's skeleton (``/<person>/skeleton``): ``person``, ``positions`` (REP-155 joint names
+  and ``root_*`` -> values);
 - ``wheel_velocity``: wheels set directly (a ``cmd_vel`` timeout stops them): ``robot``, ``left``, ``right``;
 - ``message``: a text message sent to an agent from outside (the viewer): ``sender``, ``to``, ``text``;
 - ``reset``: :meth:`Simulation.reset`: ``despawn``;
@@ -43,7 +46,7 @@ same way (:func:`refusal`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
@@ -59,8 +62,8 @@ if TYPE_CHECKING:
     from .info import EntityInfo
     from .simulation import Simulation
 
-REPLAYED = ("api", "base_velocity", "person_velocity", "person_path", "wheel_velocity", "message", "reset",
-            "entity_state", "spawn", "delete", "entity_info")
+REPLAYED = ("api", "base_velocity", "person_velocity", "person_path", "person_joints", "wheel_velocity", "message",
+            "reset", "entity_state", "spawn", "delete", "entity_info")
 """The kinds :meth:`Inputs.apply` reproduces."""
 
 _NEEDED = {"spawn": "requests", "delete": "entities", "entity_info": "category"}
@@ -170,6 +173,16 @@ class Inputs:
         self._sim.entities.people.follow(person, path)
         self.note("person_path", person=person, path=path.model_dump(mode="json", exclude_unset=True))
 
+    def person_joints(self, person: str, positions: Mapping[str, float]) -> None:
+        """Put ``person``'s joints and feet frame at ``positions`` (a ``/<person>/skeleton``;
+        ``sim.entities.people.set_joints``).
+
+        Raises:
+            ApiError: no such person, an unknown name, a value not finite or out of range (nothing noted then).
+        """
+        self._sim.entities.people.set_joints(person, positions)
+        self.note("person_joints", person=person, positions={str(k): float(v) for k, v in positions.items()})
+
     def wheel_velocity(self, robot: str, left: float, right: float) -> None:
         """Set ``robot``'s wheel velocities directly [rad/s] (a ``cmd_vel`` timeout stops them so)."""
         self._sim.robot(robot).set_wheel_velocity(left, right)
@@ -253,6 +266,8 @@ class Inputs:
             self.person_velocity(a["person"], a["linear"], a["angular"])
         elif item.kind == "person_path":
             self.person_path(a["person"], WalkPath.model_validate(a["path"]))
+        elif item.kind == "person_joints":
+            self.person_joints(a["person"], a["positions"])
         elif item.kind == "wheel_velocity":
             self.wheel_velocity(a["robot"], a["left"], a["right"])
         elif item.kind == "message":

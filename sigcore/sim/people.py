@@ -6,21 +6,24 @@ ends a walk by velocity):
 
 * **walking by velocity** (:meth:`People.walk`, ``/<person>/cmd_vel``);
 * **walking a path** (:meth:`People.follow`, ``<path>`` in the world file, ``/<person>/path``): a
-  :class:`~sigcore.sim.paths.PathWalker` gives the velocity at each step.
+  :class:`~sigcore.sim.paths.PathWalker` gives the velocity at each step;
+* **a skeleton** (:meth:`People.set_joints`, ``/<person>/skeleton``, the API's ``_setJointAngle``): joint angles
+  and the root's pose, put in place at once (the Kinect avatar's successor).
 
-Both drive a procedural gait (:mod:`sigcore.sim.gait`) that puts the feet frame and every joint where the gait has
+The walks drive a procedural gait (:mod:`sigcore.sim.gait`) that puts the feet frame and every joint where the gait has
 them after each step, in simulated time. Nothing is done for a person that stands (no step subscriber is due then,
 so the core's batched steps stay batched).
 
-Commands from outside (a transport, a viewer) go through ``sim.inputs.person_velocity`` and
-``sim.inputs.person_path``, so that a recording replays them (:mod:`sigcore.sim.inputs`).
+Commands from outside (a transport, a viewer) go through ``sim.inputs.person_velocity``,
+``sim.inputs.person_path`` and ``sim.inputs.person_joints``, so that a recording replays them
+(:mod:`sigcore.sim.inputs`).
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from functools import partial
 from typing import TYPE_CHECKING
 
@@ -29,10 +32,11 @@ import numpy as np
 from ..agent.events import Message
 from ..agent.exceptions import ApiError
 from ..errors import BackendError
-from ..geometry import quat_from_rpy, quat_yaw
+from ..geometry import angle_about, quat_from_rpy, quat_to_rpy, quat_yaw
 from ..text import quote
 from ..world.body import Body, human_body
 from ..world.exceptions import WorldError, WorldIssue
+from ..world.limits import MAX_COORDINATE
 from ..world.models import Entity, Human, WalkPath, World
 from .gait import Gait
 from .paths import PathWalker, Problem, Progress, path_problems
@@ -42,6 +46,10 @@ if TYPE_CHECKING:
     from .simulation import Simulation
 
 log = logging.getLogger("sigcore.people")
+
+ROOT_POSE = ("root_x", "root_y", "root_z", "root_roll", "root_pitch", "root_yaw")
+"""The names that set a person's feet frame in :meth:`People.set_joints` (x, y, z [m], roll, pitch, yaw [rad], in
+the world), beside its joints' REP-155 names."""
 
 
 class People:
@@ -122,6 +130,63 @@ class People:
         if problems:
             raise ApiError(f"{quote(person)} cannot walk this path: " + "; ".join(map(str, problems)))
         self._start(person, path)
+
+    def set_joints(self, person: str, positions: Mapping[str, float]) -> None:
+        """Put ``person``'s joints at ``positions`` [rad] by REP-155 name (``l_elbow``, ``r_p_shoulder``; the
+        joints not named keep their angles) and, with names of :data:`ROOT_POSE`, its feet frame there (those not
+        named keep their values), at once: the next step shows it. A walk or a path it had ends, at once.
+
+        Raises:
+            ApiError: an unknown name, a value that is not a finite number or is outside the joint's limits (each
+                message names what is valid); nothing changes then.
+        """
+        body = self.body(person)
+        joints = {j.name: j for j in body.joints if j.type == "revolute"}
+        angles: dict[str, float] = {}
+        root: dict[str, float] = {}
+        for name, value in positions.items():
+            joint = joints.get(name)
+            if joint is None and name not in ROOT_POSE:
+                raise ApiError(f"{quote(person)} has no joint {quote(str(name))}; valid: its REP-155 joints "
+                               f"{', '.join(joints)}, and {', '.join(ROOT_POSE)} for its feet frame")
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                raise ApiError(f"{name} of {quote(person)}: {value!r} is not a number") from None
+            if not math.isfinite(v) or abs(v) > MAX_COORDINATE:
+                raise ApiError(f"{name} of {quote(person)}: {v!r}; valid: a finite number")
+            if joint is not None and not joint.lower - 1e-9 <= v <= joint.upper + 1e-9:
+                raise ApiError(f"joint {quote(name)} of {quote(person)} turns from {joint.lower:g} to "
+                               f"{joint.upper:g} rad, got {v:g}")
+            (angles if joint is not None else root)[name] = v
+        self._walkers.pop(person, None)
+        self._gaits.pop(person, None)
+        backend = self._sim.backend
+        if root:
+            pos, quat = backend.get_pose(person)
+            now = dict(zip(ROOT_POSE, (*(float(v) for v in pos), *quat_to_rpy(quat)), strict=True))
+            now.update(root)
+            x, y, z, roll, pitch, yaw = (now[k] for k in ROOT_POSE)
+            backend.set_pose(person, np.array([x, y, z]), quat_from_rpy(roll, pitch, yaw))
+        if angles:
+            backend.set_joint_angles(person, angles)
+
+    def joint_quaternion(self, person: str, joint: str, wxyz: Sequence[float], offset: bool = False) -> float:
+        """The angle [rad] that ``_setJointQuaternion`` gives ``person``'s ``joint``: the twist of ``wxyz`` about
+        the joint's axis (added to its angle now with ``offset``).
+
+        Raises:
+            ApiError: no such person or joint, or a zero or non-finite quaternion.
+        """
+        joints = {j.name: j for j in self.body(person).joints if j.type == "revolute"}
+        if joint not in joints:
+            raise ApiError(f"{quote(person)} has no joint {quote(joint)}; valid: {', '.join(joints)}")
+        q = np.asarray([float(v) for v in wxyz], dtype=float)
+        if q.shape != (4,) or not np.isfinite(q).all() or float(np.linalg.norm(q)) < 1e-9:
+            raise ApiError(f"quaternion {tuple(q.tolist())} of {quote(person)}'s {quote(joint)}; valid: 4 finite "
+                           "numbers qw qx qy qz, not all zero, e.g. 1 0 0 0")
+        angle = angle_about(joints[joint].axis, q)
+        return angle + self._sim.backend.get_joint_angle(person, joint) if offset else angle
 
     def progress(self, person: str) -> Progress | None:
         """Where ``person`` is on the path it walks (None: it walks no path; a walked path's last state stays

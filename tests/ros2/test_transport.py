@@ -8,6 +8,7 @@ from __future__ import annotations
 import importlib
 import math
 
+import numpy as np
 import pytest
 
 pytest.importorskip("rclpy", reason="rclpy (ROS 2 Jazzy wheels) is not importable")
@@ -16,6 +17,7 @@ pytest.importorskip("sigcore_ros2", reason="the sigcore-ros2 plugin is not insta
 from rosproc import WORLD, SimProcess  # noqa: E402
 
 from sigcore.api import api_table  # noqa: E402
+from sigcore.geometry import quat_from_rpy, quat_mul, quat_rotate  # noqa: E402
 from sigcore.world import parse_world  # noqa: E402
 
 pytestmark = pytest.mark.ros2
@@ -188,6 +190,32 @@ def test_a_path_on_man_path_walks_the_person_and_bad_paths_are_refused(sim_proc:
     assert out["arrived"] == pytest.approx([-1.5, -1.0], abs=0.01)
     assert 1.5 < out["took"] < 10.0  # real time paced: 2.05 s simulated, with wide margins for a loaded machine
     assert out["after"] == pytest.approx(out["arrived"], abs=1e-6)
+
+
+def _chain(frames: dict, child: str) -> tuple[np.ndarray, np.ndarray]:
+    """The pose in ``world`` of TF frame ``child``, composed from ``frames`` (child -> [parent, xyz, wxyz])."""
+    xyz, wxyz = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
+    while child != "world":
+        parent, t, q = frames[child]
+        xyz, wxyz = np.asarray(t) + quat_rotate(np.asarray(q), xyz), quat_mul(np.asarray(q), wxyz)
+        child = parent
+    return xyz, wxyz
+
+
+def test_a_skeleton_stream_poses_the_person_and_bad_ones_are_refused(sim_proc: SimProcess) -> None:
+    """A JointState stream on /man/skeleton from another process moves the person's joints and feet frame: the
+    wrist's and the head's TF (composed from /tf and /tf_static) are where forward kinematics of the commanded angles
+    puts them, within 1 mm; skeletons with lengths that differ, an unknown joint, a NaN or a joint named twice are
+    refused and the pose stays."""
+    out = sim_proc.client("skeleton.py", timeout=60)
+    root = out["root"]
+    feet = ([root["root_x"], root["root_y"], 0.0], quat_from_rpy(0.0, 0.0, root["root_yaw"]))
+    model = parse_world(WORLD).urdf("man").model
+    for link in ("l_wrist", "head"):
+        want, _ = model.link_pose(link, out["pose"], *feet)
+        got, _ = _chain(out["posed"], f"{link}_man")
+        np.testing.assert_allclose(got, want, atol=1e-3)
+        np.testing.assert_allclose(_chain(out["after"], f"{link}_man")[0], got, atol=1e-9)
 
 
 def test_joint_states_scan_and_static_frames(sim_proc: SimProcess) -> None:

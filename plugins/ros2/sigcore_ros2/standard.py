@@ -5,7 +5,8 @@ and the URDF's link names (e.g. ``base_link``); with several, each robot's frame
 objects and humans by their names. On /tf, in one message per state publication with one stamp: ``odom ->
 base_link`` (wheel odometry), every movable joint, the root link of a free robot; in another, at
 ``entity_tf_rate``, ``world -> <entity>`` of every object and human. The static part of the tree (``world ->
-odom``, fixed joints) is the core's ``/tf_static`` publication.
+odom``, fixed joints) is the core's ``/tf_static`` publication. The people's topics (cmd_vel, path, skeleton) are
+:class:`~.people.PeopleTopics`'.
 """
 
 from __future__ import annotations
@@ -16,8 +17,7 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from geometry_msgs.msg import TransformStamped, Twist
-from nav_msgs.msg import Odometry, Path
-from pydantic import ValidationError
+from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState, LaserScan
@@ -31,10 +31,10 @@ from sigcore.sim.lidar import Scan
 from sigcore.sim.odometry_covariance import odometry_covariance
 from sigcore.text import clip
 from sigcore.transport import Endpoint
-from sigcore.world.models import WalkPath, Waypoint
 
 from .cdr import CdrTemplate
 from .convert import offered
+from .people import PeopleTopics
 from .publications import fill_message
 from .qos import Qos
 
@@ -48,11 +48,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("sigcore.ros2")
 
-WALK_TIMEOUT = 0.5
-"""A person walked by ``/<person>/cmd_vel`` stands again after this long without a message [s of simulated time]
-(as a robot's drive with the default ``cmd_vel_timeout``)."""
-PATH_SPEED = 1.0
-"""The speed a person walks a ``/<person>/path`` at when its world file gives it no ``<path speed>`` [m/s]."""
 
 
 class StandardEndpoints:
@@ -87,11 +82,10 @@ class StandardEndpoints:
         self.joints: dict[str, list[str]] = {}
         self.scan_pub: dict[tuple[str, str], Any] = {}
         self.cmd_vel_sub: dict[str, Any] = {}
-        self.path_sub: dict[str, Any] = {}
+        self.people = PeopleTopics(sim, node, receiver, qos, self.topics)
         self._owned: dict[str, list[str]] = {}  # robot -> its topics
         self._timed_out: set[str] = set()  # robots whose cmd_vel timeout was logged (once each)
         self._cmd_vel_deadline: dict[str, int] = {}  # robot -> step at which its cmd_vel times out
-        self._walk_deadline: dict[str, int] = {}  # person -> step at which its cmd_vel times out
         self.add([h.name for h in sim.entities.values() if isinstance(h, RobotObj)])
         self.add_people(list(sim.entities.people.names))
         sim.events.subscribe("scan", self._scan)
@@ -152,86 +146,22 @@ class StandardEndpoints:
     @property
     def owners(self) -> tuple[str, ...]:
         """The robots and people that have topics here."""
-        return tuple(self._owned)
+        return (*self._owned, *self.people.owners)
 
     def add_people(self, people: list[str]) -> None:
-        """Create ``/<person>/cmd_vel`` (geometry_msgs/Twist) and ``/<person>/path`` (nav_msgs/Path) of each of
-        ``people``. A Twist walks the person (``sim.inputs.person_velocity``), which stands again when no message
-        came for :data:`WALK_TIMEOUT` s of simulated time; a Path has it walk through the poses' positions
-        (``sim.inputs.person_path``) at its ``<path>``'s speed, or :data:`PATH_SPEED`."""
-        for name in people:
-            ns = self.sim.entities.namespace(name)
-            topic = f"{ns}/{name}/cmd_vel"
-            sub = self.node.create_subscription(Twist, topic, lambda *_: None, self.qos.commands(topic))
-            self.receiver.add_subscription(sub, self._walk(name, topic))
-            self.cmd_vel_sub[name] = sub
-            self.topics[topic] = "geometry_msgs/msg/Twist"
-            path_topic = f"{ns}/{name}/path"
-            sub = self.node.create_subscription(Path, path_topic, lambda *_: None, self.qos.commands(path_topic))
-            self.receiver.add_subscription(sub, self._path(name, path_topic))
-            self.path_sub[name] = sub
-            self.topics[path_topic] = "nav_msgs/msg/Path"
-            self._owned.setdefault(name, []).extend([topic, path_topic])
-
-    def _path(self, person: str, topic: str) -> Any:
-        """The handler of ``/<person>/path``."""
-
-        def handle(msg: Path) -> None:
-            try:
-                path = self._walk_path(person, msg)
-                self.sim.inputs.person_path(person, path)
-            except ApiError as e:
-                log.warning("%s refused: %s", topic, clip(str(e)), extra=log_key(topic, type(e).__name__))
-                return
-            self._walk_deadline.pop(person, None)  # a cmd_vel's timeout must not stop the path
-
-        return handle
-
-    def _walk_path(self, person: str, msg: Path) -> WalkPath:
-        """The :class:`WalkPath` of a nav_msgs/Path for ``person``.
-
-        Raises:
-            ApiError: a frame other than the world's, no poses, a position that is not finite or out of range.
-        """
-        frame = msg.header.frame_id
-        if frame not in ("", WORLD):
-            raise ApiError(f"a path in frame '{clip(frame, 40)}'; valid: '{WORLD}' (or empty): the positions are "
-                           "the world's")
-        if not msg.poses:
-            raise ApiError("a path with no poses; valid: one or more, walked in order (their positions' x and y)")
-        own = self.sim.entities.people.model(person).path
-        try:
-            points = tuple(Waypoint(x=p.pose.position.x, y=p.pose.position.y) for p in msg.poses)
-            return WalkPath(speed=own.speed if own is not None else PATH_SPEED, waypoints=points)
-        except ValidationError as e:
-            first = e.errors()[0]
-            where = ".".join(str(v) for v in first["loc"])
-            raise ApiError(f"a path's poses: {where}: {first['msg']} (got {first.get('input')!r})") from None
-
-    def _walk(self, person: str, topic: str) -> Any:
-        """The handler of ``/<person>/cmd_vel``."""
-        steps = max(1, round(WALK_TIMEOUT / self.sim.dt))
-
-        def handle(msg: Twist) -> None:
-            try:
-                self.sim.inputs.person_velocity(person, msg.linear.x, msg.angular.z)
-            except ApiError as e:  # the transport's log filter lets one record per (topic, kind) through
-                log.warning("%s refused: %s", topic, clip(str(e)), extra=log_key(topic, type(e).__name__))
-                return
-            self._walk_deadline[person] = self.sim.step_count + steps
-
-        return handle
+        """Create the topics of ``people`` (:class:`~.people.PeopleTopics`)."""
+        self.people.add(people)
 
     def remove(self, robots: list[str]) -> None:
         """Destroy the topics of ``robots`` (deleted while running), then rebuild the state messages."""
         node = self.node
+        self.people.remove(robots)
         for name in robots:
             for topic in self._owned.pop(name, []):
                 self.topics.pop(topic, None)
-            for subs in (self.cmd_vel_sub, self.path_sub):
-                sub = subs.pop(name, None)
-                if sub is not None and self.receiver.retire([sub]):
-                    node.destroy_subscription(sub)
+            sub = self.cmd_vel_sub.pop(name, None)
+            if sub is not None and self.receiver.retire([sub]):
+                node.destroy_subscription(sub)
             for pubs in (self.joint_pub, self.odom_pub):
                 pub = pubs.pop(name, None)
                 if pub is not None:
@@ -241,7 +171,6 @@ class StandardEndpoints:
             for table in (self.prefix, self.base, self.joints):
                 table.pop(name, None)
             self._cmd_vel_deadline.pop(name, None)
-            self._walk_deadline.pop(name, None)
             self._timed_out.discard(name)
         self.rebuild()
 
@@ -286,11 +215,7 @@ class StandardEndpoints:
                                         name, "drive", "drive"))
                     out.append(Endpoint(f"/{name}/cmd_vel", "geometry_msgs/msg/Twist", "topic",
                                         f"the cmd_vel {what}", name, "drive", "drive"))
-        for name in sim.entities.people.names:
-            out.append(Endpoint(f"/{name}/cmd_vel", "geometry_msgs/msg/Twist", "topic",
-                                f"the walk of human '{name}' (linear.x, angular.z)", name, "name"))
-            out.append(Endpoint(f"/{name}/path", "nav_msgs/msg/Path", "topic",
-                                f"a path for human '{name}' to walk (the poses' x, y)", name, "name"))
+        out.extend(PeopleTopics.plan(sim))
         for lidar in sim.entities.lidars:
             out.append(Endpoint(f"/{lidar.robot}/{lidar.model.name}", "sensor_msgs/msg/LaserScan", "topic",
                                 f"the scans of <lidar name='{lidar.model.name}'> of robot '{lidar.robot}'",
@@ -352,11 +277,7 @@ class StandardEndpoints:
             self.publish_entities()
         if self._cmd_vel_deadline:
             self._stop_stale_cmd_vel(n)
-        if self._walk_deadline:
-            for name in [p for p, step in self._walk_deadline.items() if n >= step]:
-                del self._walk_deadline[name]
-                if name in sim.entities:
-                    sim.inputs.person_velocity(name, 0.0, 0.0)
+        self.people.on_step(n)
 
     def publish_clock(self) -> None:
         """Publish the current time now (at start, after a reset, when the simulation goes idle, and by the /clock
