@@ -270,3 +270,19 @@ def test_a_recorded_path_replays_bit_for_bit(tmp_path: Path) -> None:
     assert equal and worst == 0.0
     equal, worst, _ = resimulate(rec, tmp_path / "world", [i for i in rec.inputs if i.kind != "message"])
     assert not equal and worst > 1.0
+
+
+def test_a_person_waiting_for_a_deleted_entity_walks_on(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    """``until_near`` an entity that is deleted while the person waits: it walks on at once, with one warning that
+    names both."""
+    sim = _sim(tmp_path, '<human name="op" pose="0 0 0"><path><waypoint x="0" y="0" until_near="bot"/>'
+                         '<waypoint x="1" y="0"/></path></human>' + ROBOT.format("-4 0 0.1"))
+    sim.step(200)
+    assert sim.entities.people.progress("op").state == "waiting"
+    sim.inputs.delete(["bot"])
+    with caplog.at_level("WARNING", logger="sigcore.people"):
+        sim.step(1000)
+    assert sim.entities.people.progress("op").state == "done"
+    assert np.linalg.norm(_xy(sim, "op") - [1, 0]) < 0.05
+    said = [r.getMessage() for r in caplog.records if r.name == "sigcore.people"]
+    assert said == ["'op' waits for 'bot' to come near, which is gone: it walks on"]

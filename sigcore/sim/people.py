@@ -229,7 +229,7 @@ class People:
     def _distance(self, person: str, other: str) -> float | None:
         """The distance [m] on the floor from ``person`` to ``other``; None once ``other`` is gone (a condition
         on it counts as met, with a warning)."""
-        if all(e.name != other for e in self._now().entities):
+        if other not in self._sim.entities:  # checked each step while it waits: a dict look-up
             if (person, other) not in self._gone:
                 self._gone.add((person, other))
                 log.warning("'%s' waits for '%s' to come near, which is gone: it walks on", person, other)
